@@ -1,0 +1,35 @@
+# slipwave workflow: friction-bench recordings to answers.
+# Run: snakemake --cores 2            (the default campaign of config/config.yaml)
+#      snakemake --cores 2 --configfile my_campaign.yaml
+from snakemake.utils import min_version, validate
+
+from slipwave.campaign import column_arguments, read_campaign
+
+min_version("8.10")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.json")
+tests = read_campaign(config["tests"])
+validate(tests, "workflow/schemas/tests.schema.json")
+for name in tests["columns"]:
+    column_arguments(config, name)  # an unknown column-map name fails here, before any job
+
+TEST_IDS = list(tests["test_id"])
+
+
+wildcard_constraints:
+    test_id="|".join(TEST_IDS) or "no-tests",
+
+
+include: "workflow/rules/ingest.smk"
+include: "workflow/rules/report.smk"
+
+
+rule all:
+    input:
+        expand("results/{test_id}/recording.nc", test_id=TEST_IDS),
+        expand("reports/{test_id}.html", test_id=TEST_IDS),
+    default_target: True

@@ -1,0 +1,54 @@
+"""The one exception family of slipwave.
+
+Every error that bad input can cause is a :class:`SlipwaveError`, so a caller
+(or the workflow) can catch them all and show the message as it is: each
+message names the file, the place in it and what is wrong.
+"""
+
+from __future__ import annotations
+
+from os import PathLike
+
+
+class SlipwaveError(Exception):
+    """Base class of every error slipwave raises on bad input or failed computation."""
+
+
+class ConfigError(SlipwaveError):
+    """A configuration or campaign table is invalid."""
+
+
+class AcquisitionError(SlipwaveError):
+    """An acquisition file cannot be read.
+
+    Parameters
+    ----------
+    path
+        The file being read.
+    message
+        What is wrong.
+    line
+        1-based line number in the file, when the problem has one.
+    column
+        Name (or 1-based index) of the column, when the problem has one.
+
+    """
+
+    def __init__(
+        self,
+        path: str | PathLike[str],
+        message: str,
+        *,
+        line: int | None = None,
+        column: str | int | None = None,
+    ) -> None:
+        self.path = str(path)
+        self.line = line
+        self.column = column
+        self.reason = message
+        where = self.path
+        if line is not None:
+            where += f", line {line}"
+        if column is not None:
+            where += f", column {column!r}" if isinstance(column, str) else f", column {column}"
+        super().__init__(f"{where}: {message}")

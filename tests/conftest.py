@@ -1,0 +1,33 @@
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+CANONICAL = """\
+# test_id: t1
+# sample_rate_hz: 100
+# length_mm: 80
+# height_mm: 40
+# width_mm: 10
+# speed_mm_s: 0.048
+# normal_load_n: 85
+time [s],T [N],N [N],DG [mm],DD [mm],DT [mm]
+0.00,0.5,-80.0,0.10,0.20,0.000
+0.01,1.5,-80.5,0.11,0.21,0.001
+0.02,2.5,-81.0,0.12,0.22,0.002
+0.03,3.5,-81.5,0.13,0.23,0.003
+"""
+
+
+@pytest.fixture
+def write(tmp_path: Path) -> Callable[..., Path]:
+    """Write text (or bytes) to a file in tmp_path and return its path."""
+
+    def _write(content: str | bytes, name: str = "test.csv", encoding: str = "utf-8") -> Path:
+        path = tmp_path / name
+        path.write_bytes(content if isinstance(content, bytes) else content.encode(encoding))
+        return path
+
+    return _write

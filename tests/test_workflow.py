@@ -1,0 +1,94 @@
+"""The Snakemake workflow, run for real in a copy of the repository."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from slipwave.io import read_dataset
+
+ROOT = Path(__file__).parents[1]
+BIN = Path(sys.executable).parent
+SNAKEMAKE = str(BIN / "snakemake")
+# Rules call the `slipwave` command: the environment's bin folder goes first on PATH.
+ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
+pytestmark = pytest.mark.workflow
+
+
+@pytest.fixture
+def workdir(tmp_path: Path) -> Path:
+    for name in ["Snakefile", "workflow", "config", "profiles", "raw_data"]:
+        source = ROOT / name
+        if source.is_dir():
+            shutil.copytree(source, tmp_path / name)
+        else:
+            shutil.copy(source, tmp_path / name)
+    return tmp_path
+
+
+def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([SNAKEMAKE, *args], cwd=workdir, capture_output=True, text=True,
+                          timeout=600, check=False, env=ENV)
+
+
+def test_dry_run_and_lint(workdir):
+    dry = snakemake(workdir, "-n")
+    assert dry.returncode == 0, dry.stderr
+    assert "ingest" in dry.stdout + dry.stderr
+    lint = snakemake(workdir, "--lint")
+    assert lint.returncode == 0, lint.stdout + lint.stderr
+
+
+def test_full_run_on_default_campaign(workdir):
+    run = snakemake(workdir, "--cores", "2")
+    assert run.returncode == 0, run.stderr
+    ids = [line.split("\t")[0] for line in
+           (workdir / "config/tests.tsv").read_text().splitlines()[1:]]
+    assert len(ids) == 3
+    for test_id in ids:
+        recording = read_dataset(workdir / f"results/{test_id}/recording.nc")
+        assert recording.attrs["test_id"] == test_id
+        page = (workdir / f"reports/{test_id}.html").read_text()
+        assert f"Test {test_id}" in page
+        assert (workdir / f"results/logs/ingest/{test_id}.log").exists()
+
+
+def test_column_map_from_config(workdir):
+    csv = workdir / "raw_data" / "odd.csv"
+    csv.write_text("Elapsed (ms),Shear force (N),Clamp force (N)\n0,1,-50\n10,2,-50\n")
+    (workdir / "odd.tsv").write_text("test_id\tcsv\tframes\tcolumns\nodd\traw_data/odd.csv\t\t"
+                                     "labview_en\n")
+    (workdir / "odd.yaml").write_text("tests: odd.tsv\ncolumn_maps:\n  labview_en:\n"
+                                      "    Elapsed: time\n    Shear force: T\n"
+                                      "    Clamp force: N\n")
+    run = snakemake(workdir, "--cores", "1", "--configfile", "odd.yaml")
+    assert run.returncode == 0, run.stderr
+    assert read_dataset(workdir / "results/odd/recording.nc")["time"].values.tolist() == [0, 0.01]
+
+
+@pytest.mark.parametrize(
+    ("config", "table", "message"),
+    [
+        ("tests: t.tsv\ncolumn_maps:\n  x:\n    Foo: Tangential\n", None,
+         "'Tangential' is not one of"),
+        ("tests: t.tsv\nspeed: 3\n", None, "Additional properties are not allowed"),
+        ("tests: t.tsv\n", "test_id\tcsv\nbad id\tx.csv\n", "does not match"),
+        ("tests: t.tsv\n", "test_id\tcsv\tframes\tcolumns\na\tx.csv\t\tnope\n",
+         "column map 'nope' is not in the config's column_maps"),
+        ("tests: missing.tsv\n", None, "missing.tsv: campaign table not found"),
+    ],
+    ids=["bad-channel", "unknown-key", "bad-test-id", "unknown-map", "no-table"],
+)
+def test_wrong_config_fails_before_any_job(workdir, config, table, message):
+    (workdir / "bad.yaml").write_text(config)
+    (workdir / "t.tsv").write_text(table or "test_id\tcsv\na\traw_data/provisional/"
+                                   "saw_hl050.csv\n")
+    run = snakemake(workdir, "--cores", "1", "--configfile", "bad.yaml")
+    assert run.returncode != 0
+    assert message in run.stdout + run.stderr
+    assert not (workdir / "results").exists()
