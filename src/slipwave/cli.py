@@ -54,6 +54,28 @@ def _synth(args: argparse.Namespace) -> None:
         print(f"{path} ({flavour})")
 
 
+def _simulate(args: argparse.Namespace) -> None:
+    from slipwave.io import write_dataset
+    from slipwave.solver import Coulomb, LoadPath, Slab, classify, simulate
+
+    slab = Slab(length=args.length, height=args.height, width=args.width,
+                youngs_modulus=args.youngs_modulus, poisson_ratio=args.poisson_ratio,
+                elements=args.elements, holder=args.holder)
+    path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
+                    normal_control=args.normal_control, max_travel=args.max_travel)
+    result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path)
+    behaviour = classify(result)
+    result.attrs["behaviour"] = behaviour.label
+    write_dataset(result, args.output)
+    if args.plot:
+        from slipwave.plot import plot_zones
+
+        plot_zones(result).savefig(args.plot, dpi=120)
+    ratio = "not reached" if behaviour.ratio_at_gross is None else f"{behaviour.ratio_at_gross:.4f}"
+    print(f"{args.output}: {result.sizes['step']} steps, T/N at gross sliding {ratio}, "
+          f"behaviour {behaviour.label}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``slipwave`` (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -80,6 +102,30 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
     report.add_argument("-o", "--output", type=Path, required=True, help="HTML page to write")
     report.set_defaults(run=_report)
+
+    sim = commands.add_parser(
+        "simulate", help="simulate a bench test with the frictional contact solver",
+        description="Press the flat on the slab, then move it until gross sliding (or up to "
+        "--max-travel), and write the zone evolution as netCDF.",
+    )
+    sim.add_argument("--height", type=float, default=40.0, help="slab height H, mm (40)")
+    sim.add_argument("--length", type=float, default=80.0, help="contact length L, mm (80)")
+    sim.add_argument("--width", type=float, default=10.0, help="slab width w, mm (10)")
+    sim.add_argument("--youngs-modulus", type=float, default=7.0, help="E, MPa (7)")
+    sim.add_argument("--poisson-ratio", type=float, default=0.48, help="nu (0.48)")
+    sim.add_argument("--elements", type=int, default=160, help="elements along the contact")
+    sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
+    sim.add_argument("--fs", type=float, required=True, help="static friction coefficient")
+    sim.add_argument("--fd", type=float, default=None, help="dynamic coefficient (fs)")
+    sim.add_argument("--normal-load", type=float, default=76.0, help="N, newtons (76)")
+    sim.add_argument("--tangential-step", type=float, default=2.0, help="T step, newtons (2)")
+    sim.add_argument("--normal-control", choices=["displacement", "force"],
+                     default="displacement", help="what is held after the normal loading")
+    sim.add_argument("--max-travel", type=float, default=None,
+                     help="go on past gross sliding up to this flat travel, mm")
+    sim.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
+    sim.add_argument("--plot", type=Path, default=None, help="also draw the zones (PNG, SVG)")
+    sim.set_defaults(run=_simulate)
 
     synth = commands.add_parser(
         "synth", help="write the provisional saw-tooth campaign (three CSVs)",

@@ -52,3 +52,23 @@ class AcquisitionError(SlipwaveError):
         if column is not None:
             where += f", column {column!r}" if isinstance(column, str) else f", column {column}"
         super().__init__(f"{where}: {message}")
+
+
+class SolverError(SlipwaveError):
+    """An increment of the contact solver did not converge.
+
+    Parameters
+    ----------
+    step
+        Index of the load step that failed.
+    residual
+        Relative complementarity residual reached (``nan`` if none).
+    message
+        What happened.
+
+    """
+
+    def __init__(self, step: int, residual: float, message: str) -> None:
+        self.step = step
+        self.residual = residual
+        super().__init__(f"step {step}: {message} (relative residual {residual:.3g})")

@@ -9,9 +9,12 @@ import matplotlib
 matplotlib.use("Agg")  # the workflow runs without a display
 
 import matplotlib.pyplot as plt
+import numpy as np
 import seaborn as sns
 import xarray as xr
+from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
+from matplotlib.patches import Patch
 
 from slipwave.io import CHANNELS
 from slipwave.signals import load_ratio
@@ -50,3 +53,49 @@ def figure_png(fig: Figure, *, dpi: int = 110) -> bytes:
     fig.savefig(buffer, format="png", dpi=dpi)
     plt.close(fig)
     return buffer.getvalue()
+
+
+ZONE_COLOURS = {"open": "#f2f2f2", "stick": "#4c72b0", "slip": "#dd8452"}
+
+
+def plot_zones(simulation: xr.Dataset, *, vertical: str = "T") -> Figure:
+    """Zone evolution as a space-time diagram: x across, load step (or T) upwards.
+
+    Open, stick and slip zones are coloured per node and step, the picture to
+    hold against a photoelastic kymograph. ``vertical`` is ``"T"`` (tangential
+    load, N) or ``"step"``. Steps of the normal loading are drawn below T = 0
+    when ``vertical="T"`` is not monotonic there, so the step axis is used then.
+    """
+    state = simulation["state"].values
+    x = simulation["x"].values
+    edges_x = np.concatenate([[x[0]], 0.5 * (x[1:] + x[:-1]), [x[-1]]])
+    values: np.ndarray | None
+    if vertical == "T":
+        T = simulation["T"].values
+        tangential = simulation["phase"].values == "tangential"
+        rows = np.flatnonzero(tangential)
+        values = T[rows]
+        label = "tangential load T [N]"
+        if rows.size < 2 or np.any(np.diff(values) <= 0):
+            rows, values, label = np.arange(state.shape[0]), None, "load step"
+    elif vertical == "step":
+        rows, values, label = np.arange(state.shape[0]), None, "load step"
+    else:
+        raise ValueError(f"vertical must be 'T' or 'step', not {vertical!r}")
+    if values is None:
+        edges_y = np.arange(rows.size + 1) - 0.5
+    else:
+        middle = 0.5 * (values[1:] + values[:-1])
+        edges_y = np.concatenate([[values[0] - (middle[0] - values[0])], middle,
+                                  [values[-1] + (values[-1] - middle[-1])]])
+    fig, ax = plt.subplots(figsize=(8.0, 5.0), layout="constrained")
+    colours = ListedColormap(list(ZONE_COLOURS.values()))
+    ax.pcolormesh(edges_x, edges_y, state[rows], cmap=colours, vmin=-0.5, vmax=2.5)
+    ax.set_xlabel("x along the contact [mm]")
+    ax.set_ylabel(label)
+    ax.legend(handles=[Patch(color=c, label=k) for k, c in ZONE_COLOURS.items()],
+              loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    attrs = simulation.attrs
+    ax.set_title(f"H = {attrs.get('slab_height', '?')} mm, fs = {attrs.get('friction_fs', '?')}, "
+                 f"fd = {attrs.get('friction_fd', '?')}", fontsize=10)
+    return fig

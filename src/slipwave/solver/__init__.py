@@ -1,0 +1,21 @@
+"""Frictional contact of an elastic slab on a rigid flat: the paper's model.
+
+Plane-strain linear elastic slab, quasi-static loading, unilateral contact
+with Coulomb friction (static and dynamic coefficients), followed increment
+by increment along the bench's load path.
+
+>>> from slipwave.solver import Slab, Coulomb, LoadPath, simulate, classify
+>>> ds = simulate(Slab(elements=40), Coulomb(fs=1.0), LoadPath())
+>>> classify(ds).sweep
+'right_to_left'
+"""
+
+from slipwave.solver.classify import Behaviour, classify
+from slipwave.solver.contact import Body, Control
+from slipwave.solver.simulate import Coulomb, LoadPath, simulate
+from slipwave.solver.slab import Condensed, Slab, condense
+
+__all__ = [
+    "Behaviour", "Body", "Condensed", "Control", "Coulomb", "LoadPath", "Slab", "classify",
+    "condense", "simulate",
+]

@@ -1,0 +1,386 @@
+"""The bench's load path, followed increment by increment."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+import xarray as xr
+
+from slipwave import __version__
+from slipwave.errors import SlipwaveError, SolverError
+from slipwave.io import CONVENTIONS
+from slipwave.solver.contact import OPEN, Body, Control, Increment, NotConverged
+from slipwave.solver.slab import Condensed, Slab, condense
+
+RESIDUAL_TOLERANCE = 1e-8
+"""Largest relative complementarity residual of a returned step."""
+
+_MAX_SPLITS = 6  # sub-stepping depth: an increment is cut into at most 64 parts
+
+
+@dataclass(frozen=True)
+class Coulomb:
+    """Coulomb friction with a static (stick limit) and a dynamic coefficient.
+
+    ``fd`` defaults to ``fs``.
+    """
+
+    fs: float
+    fd: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.fd is None:
+            object.__setattr__(self, "fd", self.fs)
+        if not (0.0 <= self.dynamic <= self.fs and np.isfinite(self.fs)):
+            raise SlipwaveError(f"friction needs 0 <= fd <= fs, got fs={self.fs}, fd={self.fd}")
+
+    @property
+    def dynamic(self) -> float:
+        """Fd as a float."""
+        return float(self.fs if self.fd is None else self.fd)
+
+
+@dataclass(frozen=True)
+class LoadPath:
+    """The bench's loading: normal approach, then the flat's tangential travel.
+
+    Parameters
+    ----------
+    normal_load
+        Normal load (N, compressive, full width) reached in step 1.
+    tangential_step
+        Increment of T (N) per tangential step until gross sliding.
+    normal_steps
+        Equal load steps of the normal approach.
+    normal_control
+        After step 1: ``"displacement"`` holds the flat's normal position (the
+        bench), ``"force"`` holds N.
+    max_travel
+        If set, go on past gross sliding, in flat-travel increments, until the
+        flat has travelled this far (mm): stick-slip cycles.
+    travel_step
+        Flat travel (mm) per increment past gross sliding; by default the travel
+        that raises T by ``tangential_step`` while the whole contact sticks.
+    max_tangential_load
+        Stop the load-controlled phase there (N) if the contact has not slid by
+        then; by default four times ``normal_load``. Under a held normal
+        displacement N grows with T, and a tall or strongly frictional slab may
+        never slide (it jams): the dataset's ``gross_sliding`` attribute says so.
+    max_steps
+        Safety bound on the number of steps.
+
+    """
+
+    normal_load: float = 76.0
+    tangential_step: float = 2.0
+    normal_steps: int = 5
+    normal_control: Literal["displacement", "force"] = "displacement"
+    max_travel: float | None = None
+    travel_step: float | None = None
+    max_tangential_load: float | None = None
+    max_steps: int = 5000
+
+    def __post_init__(self) -> None:
+        if not (self.normal_load > 0 and self.tangential_step > 0 and self.normal_steps >= 1):
+            raise SlipwaveError("normal_load, tangential_step and normal_steps must be positive")
+        if self.normal_control not in ("displacement", "force"):
+            raise SlipwaveError(f"normal_control {self.normal_control!r}: displacement or force")
+
+
+@dataclass
+class _Run:
+    """What the driver accumulates, step by step."""
+
+    slab: Slab
+    friction: Coulomb
+    body: Body
+    condensed: Condensed
+    s_prev: np.ndarray
+    slip: np.ndarray
+    steps: list[dict[str, Any]] = field(default_factory=list)
+    guess: np.ndarray | None = None
+    reached_gross: bool = False
+
+    def advance(self, previous: Control, control: Control, phase: str) -> None:
+        """Solve the increment from ``previous`` to ``control`` and keep it.
+
+        An increment that does not converge is cut in halves, recursively.
+        """
+        try:
+            increment = self._attempt(control)
+        except NotConverged:
+            self.record(self._split(previous, control, depth=1), phase, advanced=True)
+        else:
+            self.record(increment, phase)
+
+    def _attempt(self, control: Control) -> Increment:
+        fs, fd = self.friction.fs, self.friction.dynamic
+        increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess)
+        if not increment.residual <= RESIDUAL_TOLERANCE:
+            raise NotConverged(f"residual {increment.residual:.3g} above tolerance")
+        return increment
+
+    def _split(self, start: Control, end: Control, depth: int) -> Increment:
+        """Sub-stepping: reach ``end`` from ``start`` in two halves, recursively."""
+        halfway = Control(**{
+            key: None if getattr(end, key) is None else
+            0.5 * (getattr(start, key) + getattr(end, key))
+            for key in ("dx", "dy", "T", "N")
+        })
+        parts: list[Increment] = []
+        for origin, target in ((start, halfway), (halfway, end)):
+            try:
+                part = self._attempt(target)
+            except NotConverged as err:
+                if depth >= _MAX_SPLITS:
+                    raise SolverError(len(self.steps), float("nan"),
+                                      f"no convergence after {_MAX_SPLITS} sub-step levels: "
+                                      f"{err}") from err
+                part = self._split(origin, target, depth + 1)
+            self._advance(part)
+            parts.append(part)
+        # Report the whole increment: its end state and every node that slipped in it.
+        merged = parts[-1]
+        merged.round_slipped = np.maximum(parts[0].round_slipped, parts[1].round_slipped)
+        merged.iterations = parts[0].iterations + parts[1].iterations
+        merged.residual = max(parts[0].residual, parts[1].residual)
+        return merged
+
+    def _advance(self, increment: Increment) -> None:
+        relative = increment.u[self.body.ix] - increment.dx
+        self.slip += relative - self.s_prev
+        self.s_prev = relative
+        self.guess = increment.state
+
+    def record(self, increment: Increment, phase: str, *, advanced: bool = False) -> None:
+        """Keep a step (``advanced``: the sub-stepping has already moved the state)."""
+        if not advanced:
+            self._advance(increment)
+        width = self.slab.width
+        tributary = self.slab.tributary_length
+        P, Q = increment.r[self.body.iy], increment.r[self.body.ix]
+        contact = increment.state != OPEN
+        wave = increment.round_slipped >= 0
+        kind = "none"
+        if wave.any():
+            kind = "gross" if contact.any() and wave[contact].all() else "partial"
+        sensors = self.condensed.sensors @ increment.u
+        self.steps.append({
+            "state": increment.state.copy(),
+            "slip_direction": increment.direction.copy(),
+            "cascade_round": increment.round_slipped.copy(),
+            "p": P / tributary,
+            "q": Q / tributary,
+            "gap": np.where(contact, 0.0, self.body.g0 + increment.u[self.body.iy] - increment.dy),
+            "slip": self.slip.copy(),
+            "T": width * float(Q.sum()),
+            "N": width * float(P.sum()),
+            "DG": float(sensors[0]),
+            "DD": float(sensors[1]),
+            "DT": increment.dx,
+            "approach": increment.dy,
+            "phase": phase,
+            "wave": kind,
+            "residual": increment.residual,
+            "iterations": increment.iterations,
+        })
+
+    @property
+    def gross(self) -> bool:
+        return bool(self.steps) and self.steps[-1]["wave"] == "gross"
+
+
+def simulate(
+    slab: Slab,
+    friction: Coulomb,
+    path: LoadPath | None = None,
+    *,
+    condensed: Condensed | None = None,
+) -> xr.Dataset:
+    """Follow the bench's load path on a slab, increment by increment.
+
+    Step 1 presses the flat onto the slab in ``normal_steps`` load steps; step
+    2 moves the flat towards +x so that T grows by ``tangential_step`` per
+    step, until gross sliding (every contact node slipping), and optionally on
+    past it in flat-travel increments up to ``max_travel``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Coordinates ``step`` and ``x`` (mm, contact nodes, left to right).
+        Per node and step: ``state`` (0 open, 1 stick, 2 slip),
+        ``slip_direction`` (sign of the slip increment), ``cascade_round``
+        (round of the increment's cascade in which the node started slipping,
+        -1 if it did not), ``p`` and ``q`` (MPa, pressure and shear traction
+        on the slab, positive along +y and +x), ``gap`` and ``slip`` (mm,
+        accumulated slip of the slab relative to the flat). Per step: ``T``,
+        ``N`` (N, full width, N compressive positive), ``DG``, ``DD`` (mm,
+        lateral displacement of the left and right faces at 5 mm), ``DT`` (mm,
+        flat travel), ``approach`` (mm, normal approach of the flat),
+        ``phase`` (``normal``/``tangential``), ``wave`` (``none``,
+        ``partial``, ``gross``), ``residual``, ``iterations``.
+
+    Raises
+    ------
+    SolverError
+        If an increment does not converge, even sub-stepped.
+
+    Examples
+    --------
+    >>> ds = simulate(Slab(elements=40), Coulomb(fs=0.5), LoadPath(normal_load=76.0))
+    >>> bool(ds["wave"][-1] == "gross"), round(float(ds["T"][-1] / ds["N"][-1]), 6)
+    (True, 0.5)
+
+    """
+    path = path or LoadPath()
+    condensed = condensed or condense(slab)
+    body = Body(condensed.stiffness, slab.initial_gap())
+    run = _Run(slab, friction, body, condensed, s_prev=np.zeros(body.n), slip=np.zeros(body.n))
+    width = slab.width
+
+    previous = Control(dx=0.0, N=0.0)
+    for k in range(1, path.normal_steps + 1):
+        control = Control(dx=0.0, N=path.normal_load / width * k / path.normal_steps)
+        run.advance(previous, control, "normal")
+        previous = control
+
+    held = run.steps[-1]["approach"]
+
+    def hold(**motion: float) -> Control:
+        if path.normal_control == "displacement":
+            return Control(dy=held, **motion)
+        return Control(N=path.normal_load / width, **motion)
+
+    # Tangential loading by load increments, until the contact cannot carry T.
+    start_T = run.steps[-1]["T"] / width
+    step_travel = path.tangential_step / width / _stick_stiffness(body, path.normal_control)
+    k = 1
+    cap = path.max_tangential_load or 4.0 * path.normal_load
+    while not run.gross and len(run.steps) < path.max_steps:
+        if start_T + k * path.tangential_step / width > cap / width + 1e-12:
+            break
+        previous = hold(T=start_T + (k - 1) * path.tangential_step / width)
+        control = hold(T=start_T + k * path.tangential_step / width)
+        try:
+            run.record(run._attempt(control), "tangential")
+        except NotConverged:
+            sliding = _sliding(run, control, run.steps[-1]["DT"] + step_travel)
+            if sliding is not None:
+                run.record(sliding, "tangential")
+            else:
+                run.record(run._split(previous, control, depth=1), "tangential", advanced=True)
+        k += 1
+
+    run.reached_gross = run.gross
+    if path.max_travel is not None:
+        travel_step = path.travel_step or step_travel
+        dx = run.steps[-1]["DT"]
+        while dx < path.max_travel - 1e-12 and len(run.steps) < path.max_steps:
+            previous = hold(dx=dx)
+            dx = min(dx + travel_step, path.max_travel)
+            run.advance(previous, hold(dx=dx), "tangential")
+
+    return _to_dataset(run, path)
+
+
+def _stick_stiffness(body: Body, normal_control: str) -> float:
+    """dT/d(dx) per unit width while every contact node sticks (N/mm per mm)."""
+    state = np.full(body.n, 1, dtype=np.int8)
+    zero = np.zeros(body.n)
+    if normal_control == "displacement":
+        u, _, _ = body.solve_linear(state, zero, zero, Control(dx=1.0, dy=0.0))
+    else:
+        u, _, _ = body.solve_linear(state, zero, zero, Control(dx=1.0, N=0.0))
+    return float(body.sum_x @ u)
+
+
+def _sliding(run: _Run, control: Control, dx_floor: float) -> Increment | None:
+    """The gross-sliding state, if the contact cannot carry the T that ``control`` asks.
+
+    A T-controlled increment that fails either asks more than the sliding
+    contact carries (gross sliding: returned) or is merely hard (``None``: the
+    caller sub-steps it).
+    """
+    try:
+        sliding = run.body.slide(run.s_prev, run.friction.dynamic, control, dx_floor, run.guess)
+    except NotConverged as err:
+        raise SolverError(len(run.steps), float("nan"), f"gross sliding state: {err}") from err
+    if control.T is None or float(sliding.r[run.body.ix].sum()) >= control.T:
+        return None
+    if not sliding.residual <= RESIDUAL_TOLERANCE:
+        raise SolverError(len(run.steps), sliding.residual, "gross sliding state inexact")
+    return sliding
+
+
+def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
+    steps = run.steps
+    slab = run.slab
+
+    def stack(name: str) -> np.ndarray:
+        return np.stack([s[name] for s in steps])
+
+    def column(name: str) -> np.ndarray:
+        return np.array([s[name] for s in steps])
+
+    node = ("step", "x")
+    data = {
+        "state": (node, stack("state").astype(np.int8), {
+            "long_name": "contact state", "flag_values": np.array([0, 1, 2], dtype=np.int8),
+            "flag_meanings": "open stick slip"}),
+        "slip_direction": (node, stack("slip_direction").astype(np.int8), {
+            "long_name": "sign of the slab's slip increment relative to the flat",
+            "units": "1"}),
+        "cascade_round": (node, stack("cascade_round").astype(np.int16), {
+            "long_name": "cascade round in which the node started slipping in this step "
+                         "(-1: it did not)", "units": "1"}),
+        "p": (node, stack("p"), {"units": "MPa", "long_name": "contact pressure"}),
+        "q": (node, stack("q"), {"units": "MPa",
+                                 "long_name": "shear traction on the slab (positive along +x)"}),
+        "gap": (node, stack("gap"), {"units": "mm", "long_name": "normal gap"}),
+        "slip": (node, stack("slip"), {"units": "mm",
+                                       "long_name": "accumulated slip of the slab relative "
+                                                    "to the flat"}),
+        "T": ("step", column("T"), {"units": "N", "long_name": "tangential load"}),
+        "N": ("step", column("N"), {"units": "N", "long_name": "normal load",
+                                    "comment": "compressive load, positive"}),
+        "DG": ("step", column("DG"), {"units": "mm",
+                                      "long_name": "left-edge lateral displacement of the "
+                                                   "slab, 5 mm above the contact"}),
+        "DD": ("step", column("DD"), {"units": "mm",
+                                      "long_name": "right-edge lateral displacement of the "
+                                                   "slab, 5 mm above the contact"}),
+        "DT": ("step", column("DT"), {"units": "mm", "long_name": "flat displacement"}),
+        "approach": ("step", column("approach"), {"units": "mm",
+                                                  "long_name": "normal approach of the flat"}),
+        "phase": ("step", column("phase").astype(str), {"long_name": "load phase"}),
+        "wave": ("step", column("wave").astype(str), {
+            "long_name": "nodes that slipped in the step: none, partial or gross (all)"}),
+        "residual": ("step", column("residual"), {
+            "units": "1", "long_name": "relative complementarity residual"}),
+        "iterations": ("step", column("iterations").astype(np.int32), {
+            "units": "1", "long_name": "active-set iterations"}),
+    }
+    coords = {
+        "step": ("step", np.arange(len(steps)), {"long_name": "load step"}),
+        "x": ("x", slab.x, {"units": "mm", "long_name": "position along the contact, "
+                            "origin at its centre"}),
+        "tributary_length": ("x", slab.tributary_length, {
+            "units": "mm", "long_name": "contact length each node stands for"}),
+    }
+    attrs: dict[str, Any] = {
+        "title": "slipwave frictional contact simulation",
+        "Conventions": CONVENTIONS,
+        "source": f"slipwave {__version__} slipwave.solver.simulate",
+        "element": "bilinear quadrilaterals, selective reduced integration, plane strain",
+    }
+    slab_attrs = {k: v for k, v in asdict(slab).items() if k != "profile"}
+    attrs.update({f"slab_{k}": v for k, v in slab_attrs.items()})
+    attrs["slab_profile"] = "flat" if slab.profile is None else repr(slab.profile)
+    attrs["friction_fs"] = run.friction.fs
+    attrs["friction_fd"] = run.friction.dynamic
+    attrs.update({f"path_{k}": ("none" if v is None else v) for k, v in asdict(path).items()})
+    attrs["gross_sliding"] = "reached" if run.reached_gross else (
+        "not reached: the tangential load cap or step limit came first")
+    return xr.Dataset(data, coords=coords, attrs=attrs)
