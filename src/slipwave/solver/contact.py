@@ -231,15 +231,20 @@ class Body:
                 if np.array_equal(new, state) and np.array_equal(new_sign, sign):
                     break
                 key = new.tobytes() + new_sign.tobytes()
-                flipping = (new != state) & ~in_wave & cascade
-                if key in seen and flipping.any():
-                    # A node outside the wave at the edge of the contact flips between
-                    # stuck in tension and open in penetration: it is in contact with a
-                    # vanishing pressure, so any shear exceeds fs P: it joins the wave.
-                    in_wave |= flipping
-                    round_slipped[flipping] = rounds
-                    limit = np.where(in_wave, dynamic, static)
-                    may_slip = in_wave
+                if key in seen:
+                    # A cycle: nodes at the edge of the contact flip between stuck in
+                    # tension and open in penetration. They are in contact with a
+                    # vanishing pressure, so any shear exceeds f P: they slide (and,
+                    # in a cascade, join the wave).
+                    flipping = new != state
+                    if cascade:
+                        joining = flipping & ~in_wave
+                        in_wave |= joining
+                        round_slipped[joining] = rounds
+                        limit = np.where(in_wave, dynamic, static)
+                        may_slip = in_wave
+                    new[flipping] = SLIP
+                    new_sign[flipping] = np.where(trial[flipping] < 0, -1.0, 1.0)
                     seen.clear()
                 seen.add(key)
                 state, sign = new, new_sign
@@ -312,6 +317,7 @@ class Body:
             state = np.where(guess == OPEN, OPEN, SLIP).astype(np.int8)
         mu = np.full(self.n, dynamic)
         sliding = Control(dx=dx_floor, dy=control.dy, N=control.N)
+        seen: set[bytes] = set()
         for _ in range(_MAX_ITERATIONS):
             u, dx, dy = self.solve_linear(state, mu, s_prev, sliding)
             r = self.K @ u
@@ -319,6 +325,10 @@ class Body:
             new = np.where(r[self.iy] - self.cy * gap > 0, SLIP, OPEN).astype(np.int8)
             if np.array_equal(new, state):
                 break
+            if new.tobytes() in seen:
+                new[new != state] = SLIP  # contact-edge flip: in contact, vanishing pressure
+                seen.clear()
+            seen.add(new.tobytes())
             state = new
         else:
             raise NotConverged("gross sliding state did not settle")

@@ -258,7 +258,7 @@ def simulate(
     step_travel = path.tangential_step / width / _stick_stiffness(body, path.normal_control)
     k = 1
     cap = path.max_tangential_load or 4.0 * path.normal_load
-    while not run.gross and len(run.steps) < path.max_steps:
+    while len(run.steps) < path.max_steps:
         if start_T + k * path.tangential_step / width > cap / width + 1e-12:
             break
         previous = hold(T=start_T + (k - 1) * path.tangential_step / width)
@@ -272,6 +272,8 @@ def simulate(
             else:
                 run.record(run._split(previous, control, depth=1), "tangential", advanced=True)
         k += 1
+        if run.gross:
+            break
 
     run.reached_gross = run.gross
     if path.max_travel is not None:

@@ -18,6 +18,7 @@ not rebuild them.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import os
@@ -168,7 +169,8 @@ def condense(slab: Slab, *, use_cache: bool = True) -> Condensed:
 
     The geometry (not E, width, profile or friction) is the cache key.
     """
-    unit = _condensed_unit(slab) if use_cache else _condensed_unit.__wrapped__(slab)
+    geometry = dataclasses.replace(slab, youngs_modulus=1.0, width=1.0, profile=None)
+    unit = _condensed_unit(geometry) if use_cache else assemble_condensed(geometry)
     return Condensed(unit.stiffness * slab.youngs_modulus, unit.sensors)
 
 
@@ -181,7 +183,7 @@ def _condensed_unit(slab: Slab) -> Condensed:
                 return Condensed(stored["stiffness"], stored["sensors"])
         except (OSError, ValueError, KeyError):
             pass  # a damaged cache file is rebuilt
-    result = assemble_condensed(slab, youngs_modulus=1.0)
+    result = assemble_condensed(slab)
     try:
         with atomic_output(path) as temporary, open(temporary, "wb") as handle:
             np.savez(handle, stiffness=result.stiffness, sensors=result.sensors)
@@ -190,9 +192,9 @@ def _condensed_unit(slab: Slab) -> Condensed:
     return result
 
 
-def assemble_condensed(slab: Slab, *, youngs_modulus: float | None = None) -> Condensed:
+def assemble_condensed(slab: Slab) -> Condensed:
     """Assemble the slab with scikit-fem and condense it (no cache)."""
-    E = slab.youngs_modulus if youngs_modulus is None else youngs_modulus
+    E = slab.youngs_modulus
     nu = slab.poisson_ratio
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))
     mu = E / (2 * (1 + nu))
