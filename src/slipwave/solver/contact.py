@@ -31,10 +31,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg.lapack import dgetrf, dgetrs
 
 OPEN, STICK, SLIP = 0, 1, 2
 
 _MAX_ITERATIONS = 60
+_PLANS_KEPT = 16  # factorised zone states kept per body
 
 
 class NotConverged(Exception):  # noqa: N818 - an internal signal, not an error of the API
@@ -71,6 +73,7 @@ class Increment:
     direction: np.ndarray
     round_slipped: np.ndarray
     iterations: int
+    sign: np.ndarray
     residual: float
 
 
@@ -86,7 +89,12 @@ class Body:
 
     """
 
-    def __init__(self, stiffness: np.ndarray, initial_gap: np.ndarray) -> None:
+    def __init__(
+        self,
+        stiffness: np.ndarray,
+        initial_gap: np.ndarray,
+        compliance: np.ndarray | None = None,
+    ) -> None:
         self.K = np.ascontiguousarray(stiffness, dtype=np.float64)
         self.n = initial_gap.size
         if self.K.shape != (2 * self.n, 2 * self.n):
@@ -99,6 +107,10 @@ class Body:
         self.cy = diagonal[self.iy]
         self.sum_x = self.K[self.ix].sum(axis=0)  # sum Q = sum_x @ u
         self.sum_y = self.K[self.iy].sum(axis=0)
+        # Compliance, for the flexibility form; None when the body alone has a
+        # rigid mode (then only the stiffness form is used).
+        self.C = compliance
+        self._plans: dict[bytes, _Plan] = {}
 
     def solve_linear(
         self,
@@ -110,56 +122,21 @@ class Body:
         """Displacements and flat position for a fixed zone state.
 
         ``mu`` is the signed friction coefficient of slipping nodes (``Q = mu P``).
+        The smaller of two equivalent forms is solved: displacements of the open
+        and slipping nodes (2 open + slip unknowns), or forces of the stuck and
+        slipping ones (2 stick + slip). Each zone state's matrix is factorised
+        once and kept for the next increments, which mostly meet it again.
         """
-        K, ix, iy = self.K, self.ix, self.iy
-        contact = state != OPEN
-        stick = state == STICK
-        slip = state == SLIP
-        opened = ~contact
-        unknown = np.concatenate([ix[slip | opened], iy[opened]])
-        base = np.zeros(2 * self.n)
-        base[ix[stick]] = s_prev[stick]
-        base[iy[contact]] = -self.g0[contact]
-        along_x = np.zeros(2 * self.n)
-        along_x[ix[stick]] = 1.0
-        along_y = np.zeros(2 * self.n)
-        along_y[iy[contact]] = 1.0
-
-        rows = [K[ix[opened]], K[iy[opened]], K[ix[slip]] - mu[slip, None] * K[iy[slip]]]
-        rhs = [np.zeros(2 * int(opened.sum()) + int(slip.sum()))]
-        if control.T is not None:
-            rows.append(self.sum_x[None])
-            rhs.append(np.array([control.T]))
-        if control.N is not None:
-            rows.append(self.sum_y[None])
-            rhs.append(np.array([control.N]))
-        R = np.concatenate(rows)
-        b = np.concatenate(rhs) - R @ base
-        columns = [R[:, unknown]]
-        if control.dx is None:
-            columns.append((R @ along_x)[:, None])
-        else:
-            b -= control.dx * (R @ along_x)
-        if control.dy is None:
-            columns.append((R @ along_y)[:, None])
-        else:
-            b -= control.dy * (R @ along_y)
-        M = np.concatenate(columns, axis=1)
-        if M.shape[0] == 0:
-            z = np.zeros(0)
-        else:
-            try:
-                z = np.linalg.solve(M, b)
-            except np.linalg.LinAlgError as err:
-                raise NotConverged("singular zone state") from err
-            if not np.isfinite(z).all():
-                raise NotConverged("singular zone state")
-        k = unknown.size
-        dx = control.dx if control.dx is not None else float(z[k])
-        dy = control.dy if control.dy is not None else float(z[-1])
-        u = base + dx * along_x + dy * along_y
-        u[unknown] = z[:k]
-        return u, dx, dy
+        kinds = (control.dx is None, control.dy is None, control.T is not None,
+                 control.N is not None)
+        key = state.tobytes() + np.where(state == SLIP, mu, 0.0).tobytes() + bytes(kinds)
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = _Plan(self, state, mu, kinds)
+            if len(self._plans) >= _PLANS_KEPT:
+                self._plans.pop(next(iter(self._plans)))
+            self._plans[key] = plan
+        return plan.solve(s_prev, control)
 
     def solve_increment(
         self,
@@ -168,6 +145,7 @@ class Body:
         static: float,
         dynamic: float,
         guess: np.ndarray | None = None,
+        guess_sign: np.ndarray | None = None,
     ) -> Increment:
         """Solve one increment from the previous relative positions ``s_prev``.
 
@@ -179,25 +157,46 @@ class Body:
             ``ux - dx`` of every node at the end of the previous increment.
         static, dynamic
             Friction coefficients fs >= fd.
-        guess
-            Zone state to start from (the previous increment's, usually).
+        guess, guess_sign
+            Zone state and friction signs to start from (the previous
+            increment's). With fs == fd the iteration starts there, and from a
+            stuck interface if that fails; with fs > fd every increment starts
+            stuck (the interface heals).
 
         Raises
         ------
         NotConverged
             When the active set cycles or the linear problem is singular; the
             caller may sub-step.
-
         """
+        if guess is not None and guess_sign is not None and static == dynamic:
+            try:
+                return self._iterate(control, s_prev, static, dynamic, guess, guess_sign,
+                                     heal=False)
+            except NotConverged:
+                pass  # e.g. slip reversing direction: start again from a stuck interface
+        return self._iterate(control, s_prev, static, dynamic, guess, None, heal=True)
+
+    def _iterate(
+        self,
+        control: Control,
+        s_prev: np.ndarray,
+        static: float,
+        dynamic: float,
+        guess: np.ndarray | None,
+        guess_sign: np.ndarray | None,
+        *,
+        heal: bool,
+    ) -> Increment:
         n = self.n
         cascade = static > dynamic
         state = np.full(n, STICK, dtype=np.int8) if guess is None else guess.astype(np.int8)
-        # Every increment starts stuck: the interface heals (fs > fd), and a stuck
-        # predictor finds the slipping nodes with their new directions in one pass.
-        state[state == SLIP] = STICK
+        sign = np.ones(n) if guess_sign is None else guess_sign.astype(np.float64)
+        if heal:
+            # A stuck predictor finds the slipping nodes with their new directions.
+            state[state == SLIP] = STICK
         in_wave = np.zeros(n, dtype=bool)
         round_slipped = np.full(n, -1, dtype=np.int16)
-        sign = np.ones(n)
         iterations = 0
         rounds = 0
         while True:
@@ -268,7 +267,8 @@ class Body:
         residual = self.residual(P, Q, gap, ds, limit, control)
         direction = np.where(state == SLIP, np.sign(ds), 0).astype(np.int8)
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state, direction=direction,
-                         round_slipped=round_slipped, iterations=iterations, residual=residual)
+                         round_slipped=round_slipped, iterations=iterations, residual=residual,
+                         sign=sign)
 
     def residual(
         self,
@@ -339,4 +339,159 @@ class Body:
         wave = np.where(state == SLIP, 0, -1).astype(np.int16)
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state,
                          direction=np.where(state == SLIP, np.sign(ds), 0).astype(np.int8),
-                         round_slipped=wave, iterations=1, residual=residual)
+                         round_slipped=wave, iterations=1, residual=residual,
+                         sign=np.ones(self.n))
+
+
+def _block(matrix: np.ndarray, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """``matrix[rows][:, columns]``; two ``take`` are faster than ``np.ix_`` here."""
+    return matrix.take(rows, axis=0).take(columns, axis=1)
+
+
+class _Plan:
+    """The factorised linear problem of one zone state (either form)."""
+
+    def __init__(
+        self, body: Body, state: np.ndarray, mu: np.ndarray, kinds: tuple[bool, ...]
+    ) -> None:
+        self.body = body
+        self.dx_unknown, self.dy_unknown, self.T_given, self.N_given = kinds
+        ix, iy = body.ix, body.iy
+        self.stick = state == STICK
+        self.slip = state == SLIP
+        self.contact = self.stick | self.slip
+        self.mu_slip = mu[self.slip]
+        n_open = body.n - int(self.contact.sum())
+        self.compliance = body.C is not None and int(self.stick.sum()) < n_open
+        self.along_x = np.zeros(2 * body.n)
+        self.along_x[ix[self.stick]] = 1.0
+        self.along_y = np.zeros(2 * body.n)
+        self.along_y[iy[self.contact]] = 1.0
+        matrix = self._compliance_matrix() if self.compliance else self._stiffness_matrix()
+        self.size = matrix.shape[0]
+        if self.size:
+            self.lu, self.piv, info = dgetrf(matrix, overwrite_a=True)
+            if info != 0 or not np.isfinite(self.lu).all():
+                raise NotConverged("singular zone state")
+
+    # Stiffness form: unknown displacements of open (x, y) and slipping (x) nodes.
+    def _stiffness_matrix(self) -> np.ndarray:
+        body, ix, iy = self.body, self.body.ix, self.body.iy
+        K = body.K
+        opened = ~self.contact
+        self.unknown = np.concatenate([ix[self.slip | opened], iy[opened]])
+        self.rows = np.concatenate([ix[opened], iy[opened], ix[self.slip]])
+        self.first_slip_row = self.rows.size - int(self.slip.sum())
+        M = _block(K, self.rows, self.unknown)
+        M[self.first_slip_row :] -= self.mu_slip[:, None] * _block(K, iy[self.slip], self.unknown)
+        extra = []
+        if self.T_given:
+            extra.append(body.sum_x[self.unknown])
+        if self.N_given:
+            extra.append(body.sum_y[self.unknown])
+        M = np.vstack([M, *extra]) if extra else M
+        # What the flat's motion does to the equations: a column where it is
+        # unknown, a right-hand side term where it is given.
+        flat = K @ np.stack([self.along_x, self.along_y], axis=1)
+        self.flat_x = self._equations(flat[:, 0])
+        self.flat_y = self._equations(flat[:, 1])
+        columns = [M]
+        if self.dx_unknown:
+            columns.append(self.flat_x[:, None])
+        if self.dy_unknown:
+            columns.append(self.flat_y[:, None])
+        return np.hstack(columns)
+
+    def _equations(self, force: np.ndarray) -> np.ndarray:
+        """The equations' left-hand sides for a displacement whose forces are ``force``."""
+        body = self.body
+        rows = force[self.rows].copy()
+        rows[self.first_slip_row :] -= self.mu_slip * force[body.iy[self.slip]]
+        extra = []
+        if self.T_given:
+            extra.append(force[body.ix].sum())
+        if self.N_given:
+            extra.append(force[body.iy].sum())
+        return np.concatenate([rows, extra]) if extra else rows
+
+    # Compliance form: unknown forces Q, P of stuck nodes and P of slipping ones.
+    def _compliance_matrix(self) -> np.ndarray:
+        body, ix, iy = self.body, self.body.ix, self.body.iy
+        C = body.C
+        assert C is not None
+        stick, slip = self.stick, self.slip
+        self.rows = np.concatenate([ix[stick], iy[self.contact]])
+        self.n_stick = int(stick.sum())
+        C_rows = C.take(self.rows, axis=0)
+        M = np.hstack([
+            C_rows.take(ix[stick], axis=1),
+            C_rows.take(iy[stick], axis=1),
+            C_rows.take(iy[slip], axis=1) + C_rows.take(ix[slip], axis=1) * self.mu_slip,
+        ])
+        self.row_along_x = np.zeros(self.rows.size)
+        self.row_along_x[: self.n_stick] = 1.0
+        self.row_along_y = 1.0 - self.row_along_x
+        columns = [M]
+        if self.dx_unknown:
+            columns.append(-self.row_along_x[:, None])
+        if self.dy_unknown:
+            columns.append(-self.row_along_y[:, None])
+        M = np.hstack(columns)
+        width = M.shape[1]
+        zeros = np.zeros(self.n_stick)
+        extra = []
+        if self.T_given:
+            extra.append(np.concatenate([np.ones(self.n_stick), zeros, self.mu_slip]))
+        if self.N_given:
+            extra.append(np.concatenate([zeros, np.ones(self.n_stick), np.ones(self.mu_slip.size)]))
+        padded = [np.pad(row, (0, width - row.size)) for row in extra]
+        return np.vstack([M, *padded]) if padded else M
+
+    def _solve(self, b: np.ndarray) -> np.ndarray:
+        if self.size == 0:
+            return np.zeros(0)
+        z, info = dgetrs(self.lu, self.piv, b)
+        if info != 0 or not np.isfinite(z).all():
+            raise NotConverged("singular zone state")
+        return np.asarray(z)
+
+    def solve(self, s_prev: np.ndarray, control: Control) -> tuple[np.ndarray, float, float]:
+        """Displacements, dx and dy for this zone state and these loads."""
+        body = self.body
+        totals = [v for v, given in ((control.T, self.T_given), (control.N, self.N_given))
+                  if given]
+        if self.compliance:
+            b = np.concatenate([s_prev[self.stick], -body.g0[self.contact]])
+            if control.dx is not None:
+                b += control.dx * self.row_along_x
+            if control.dy is not None:
+                b += control.dy * self.row_along_y
+            z = self._solve(np.concatenate([b, totals]))
+            n_stick, n_slip = self.n_stick, self.mu_slip.size
+            r = np.zeros(2 * body.n)
+            r[body.ix[self.stick]] = z[:n_stick]
+            r[body.iy[self.stick]] = z[n_stick : 2 * n_stick]
+            r[body.iy[self.slip]] = z[2 * n_stick : 2 * n_stick + n_slip]
+            r[body.ix[self.slip]] = self.mu_slip * r[body.iy[self.slip]]
+            k = 2 * n_stick + n_slip
+            dx = control.dx if control.dx is not None else float(z[k])
+            dy = control.dy if control.dy is not None else float(z[-1])
+            assert body.C is not None
+            return body.C @ r, dx, dy
+        base = np.zeros(2 * body.n)
+        base[body.ix[self.stick]] = s_prev[self.stick]
+        base[body.iy[self.contact]] = -body.g0[self.contact]
+        b = np.zeros(self.size) if self.size else np.zeros(0)
+        b[len(b) - len(totals):] = totals
+        b -= self._equations(body.K @ base)
+        if control.dx is not None:
+            b -= control.dx * self.flat_x
+        if control.dy is not None:
+            b -= control.dy * self.flat_y
+        z = self._solve(b)
+        k = self.unknown.size
+        dx = control.dx if control.dx is not None else float(z[k])
+        dy = control.dy if control.dy is not None else float(z[-1])
+        u = base + dx * self.along_x + dy * self.along_y
+        u[self.unknown] = z[:k]
+        return u, dx, dy

@@ -101,6 +101,7 @@ class _Run:
     slip: np.ndarray
     steps: list[dict[str, Any]] = field(default_factory=list)
     guess: np.ndarray | None = None
+    guess_sign: np.ndarray | None = None
     reached_gross: bool = False
 
     def advance(self, previous: Control, control: Control, phase: str) -> None:
@@ -117,7 +118,8 @@ class _Run:
 
     def _attempt(self, control: Control) -> Increment:
         fs, fd = self.friction.fs, self.friction.dynamic
-        increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess)
+        increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess,
+                                              self.guess_sign)
         if not increment.residual <= RESIDUAL_TOLERANCE:
             raise NotConverged(f"residual {increment.residual:.3g} above tolerance")
         return increment
@@ -153,6 +155,7 @@ class _Run:
         self.slip += relative - self.s_prev
         self.s_prev = relative
         self.guess = increment.state
+        self.guess_sign = increment.sign
 
     def record(self, increment: Increment, phase: str, *, advanced: bool = False) -> None:
         """Keep a step (``advanced``: the sub-stepping has already moved the state)."""
@@ -236,7 +239,7 @@ def simulate(
     """
     path = path or LoadPath()
     condensed = condensed or condense(slab)
-    body = Body(condensed.stiffness, slab.initial_gap())
+    body = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
     run = _Run(slab, friction, body, condensed, s_prev=np.zeros(body.n), slip=np.zeros(body.n))
     width = slab.width
 

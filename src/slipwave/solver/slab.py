@@ -39,7 +39,8 @@ from slipwave.io import atomic_output
 SENSOR_HEIGHT = 5.0
 """Height (mm) above the contact of the DG and DD displacement sensors."""
 
-_CACHE_VERSION = "q1sri-1"
+_CACHE_VERSION = "q1sri-3"
+_MAX_CONDITION = 1e10  # above: a rigid mode the holder does not stop
 
 
 @dataclass(frozen=True)
@@ -140,11 +141,15 @@ class Condensed:
     sensors
         (2, 2n): lateral displacements of the left and right faces at the
         sensor height, from the contact displacements.
-
+    compliance
+        The inverse of ``stiffness``; ``None`` when the slab alone is not held
+        (a holder free to rotate leaves a rigid rotation that only the contact
+        stops).
     """
 
     stiffness: np.ndarray
     sensors: np.ndarray
+    compliance: np.ndarray | None
 
 
 def cache_dir() -> Path:
@@ -171,7 +176,9 @@ def condense(slab: Slab, *, use_cache: bool = True) -> Condensed:
     """
     geometry = dataclasses.replace(slab, youngs_modulus=1.0, width=1.0, profile=None)
     unit = _condensed_unit(geometry) if use_cache else assemble_condensed(geometry)
-    return Condensed(unit.stiffness * slab.youngs_modulus, unit.sensors)
+    E = slab.youngs_modulus
+    compliance = None if unit.compliance is None else unit.compliance / E
+    return Condensed(unit.stiffness * E, unit.sensors, compliance)
 
 
 @functools.lru_cache(maxsize=32)
@@ -180,13 +187,18 @@ def _condensed_unit(slab: Slab) -> Condensed:
     if path.exists():
         try:
             with np.load(path) as stored:
-                return Condensed(stored["stiffness"], stored["sensors"])
+                compliance = stored.get("compliance")
+                return Condensed(stored["stiffness"], stored["sensors"], compliance)
         except (OSError, ValueError, KeyError):
             pass  # a damaged cache file is rebuilt
     result = assemble_condensed(slab)
     try:
         with atomic_output(path) as temporary, open(temporary, "wb") as handle:
-            np.savez(handle, stiffness=result.stiffness, sensors=result.sensors)
+            if result.compliance is None:
+                np.savez(handle, stiffness=result.stiffness, sensors=result.sensors)
+            else:
+                np.savez(handle, stiffness=result.stiffness, sensors=result.sensors,
+                         compliance=result.compliance)
     except OSError:
         pass  # a read-only cache only costs time
     return result
@@ -246,7 +258,7 @@ def assemble_condensed(slab: Slab) -> Condensed:
     k_ii = reduced[interior][:, interior].tocsc()
     k_ik = reduced[interior][:, kept_r].toarray()
     k_kk = reduced[kept_r][:, kept_r].toarray()
-    factor = spla.splu(k_ii, permc_spec="MMD_AT_PLUS_A")
+    factor = spla.splu(k_ii, permc_spec="COLAMD")
     schur = k_kk - reduced[kept_r][:, interior] @ factor.solve(k_ik)
     schur = 0.5 * (schur + schur.T)
 
@@ -255,7 +267,9 @@ def assemble_condensed(slab: Slab) -> Condensed:
     k_cc, k_co, k_oo = schur[:n2, :n2], schur[:n2, n2:], schur[n2:, n2:]
     sensors = -np.linalg.solve(k_oo, k_co.T)
     contact = k_cc + k_co @ sensors
-    return Condensed(0.5 * (contact + contact.T), sensors)
+    contact = 0.5 * (contact + contact.T)
+    held = np.linalg.cond(contact) < _MAX_CONDITION
+    return Condensed(contact, sensors, np.linalg.inv(contact) if held else None)
 
 
 def _sorted_by_x(dofs: np.ndarray, locations: np.ndarray) -> np.ndarray:
