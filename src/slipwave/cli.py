@@ -62,7 +62,8 @@ def _simulate(args: argparse.Namespace) -> None:
                 youngs_modulus=args.youngs_modulus, poisson_ratio=args.poisson_ratio,
                 elements=args.elements, holder=args.holder)
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
-                    normal_control=args.normal_control, max_travel=args.max_travel)
+                    normal_control=args.normal_control, max_travel=args.max_travel,
+                    travel_step=args.travel_step, machine_stiffness=args.machine_stiffness)
     result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path)
     behaviour = classify(result)
     result.attrs["behaviour"] = behaviour.label
@@ -123,6 +124,11 @@ def build_parser() -> argparse.ArgumentParser:
                      default="displacement", help="what is held after the normal loading")
     sim.add_argument("--max-travel", type=float, default=None,
                      help="go on past gross sliding up to this flat travel, mm")
+    sim.add_argument("--travel-step", type=float, default=None,
+                     help="flat (or actuator) travel per step past gross sliding, mm")
+    sim.add_argument("--machine-stiffness", type=float, default=None,
+                     help="drive the flat through a spring of this stiffness (N/mm) from an "
+                     "actuator, up to --max-travel in --travel-step steps")
     sim.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     sim.add_argument("--plot", type=Path, default=None, help="also draw the zones (PNG, SVG)")
     sim.set_defaults(run=_simulate)

@@ -48,13 +48,17 @@ class Control:
     """Prescribed flat motion or total force for one increment.
 
     Exactly one of ``dx`` / ``T`` and one of ``dy`` / ``N`` is given (forces
-    per unit width, N/mm).
+    per unit width, N/mm). With ``machine`` (a stiffness per unit width between
+    an actuator and the flat) the tangential equation is
+    ``sum Q + machine * dx = T``: the actuator at X drives the flat through a
+    spring when ``T = machine * X``.
     """
 
     dx: float | None = None
     dy: float | None = None
     T: float | None = None
     N: float | None = None
+    machine: float = 0.0
 
     def __post_init__(self) -> None:
         if (self.dx is None) == (self.T is None) or (self.dy is None) == (self.N is None):
@@ -75,6 +79,9 @@ class Increment:
     iterations: int
     sign: np.ndarray
     residual: float
+    u_before: np.ndarray | None = None
+    dx_before: float = 0.0
+    dy_before: float = 0.0
 
 
 class Body:
@@ -129,10 +136,11 @@ class Body:
         """
         kinds = (control.dx is None, control.dy is None, control.T is not None,
                  control.N is not None)
-        key = state.tobytes() + np.where(state == SLIP, mu, 0.0).tobytes() + bytes(kinds)
+        key = (state.tobytes() + np.where(state == SLIP, mu, 0.0).tobytes() + bytes(kinds)
+               + np.float64(control.machine).tobytes())
         plan = self._plans.get(key)
         if plan is None:
-            plan = _Plan(self, state, mu, kinds)
+            plan = _Plan(self, state, mu, kinds, control.machine)
             if len(self._plans) >= _PLANS_KEPT:
                 self._plans.pop(next(iter(self._plans)))
             self._plans[key] = plan
@@ -218,7 +226,8 @@ class Body:
                 bound = limit * np.maximum(pressure, 0.0)
                 slipping = (new == STICK) & may_slip & (np.abs(trial) > bound)
                 new[slipping] = SLIP
-                if control.dx is None and not (new == STICK).any() and slipping.any():
+                if (control.dx is None and control.machine == 0.0
+                        and not (new == STICK).any() and slipping.any()):
                     # Under load control a state without a stuck node leaves dx
                     # undetermined; keep the least overloaded node stuck. If the
                     # contact truly cannot carry T, the iteration fails and the
@@ -249,6 +258,9 @@ class Body:
                 state, sign = new, new_sign
             else:
                 raise NotConverged(f"active set still changing after {_MAX_ITERATIONS} iterations")
+            if rounds == 0:
+                # The stuck state of the increment, before any wave: the peak.
+                before = (u.copy(), dx, dy)
             if not cascade:
                 wave = state == SLIP
                 round_slipped[wave] = 0
@@ -264,11 +276,12 @@ class Body:
             sign[over] = np.sign(Q[over])
 
         limit = np.where(in_wave, dynamic, static)
-        residual = self.residual(P, Q, gap, ds, limit, control)
+        residual = self.residual(P, Q, gap, ds, limit, control, dx)
         direction = np.where(state == SLIP, np.sign(ds), 0).astype(np.int8)
+        u_before, dx_before, dy_before = before if cascade else (u, dx, dy)
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state, direction=direction,
                          round_slipped=round_slipped, iterations=iterations, residual=residual,
-                         sign=sign)
+                         sign=sign, u_before=u_before, dx_before=dx_before, dy_before=dy_before)
 
     def residual(
         self,
@@ -278,6 +291,7 @@ class Body:
         ds: np.ndarray,
         limit: np.ndarray,
         control: Control,
+        dx: float,
     ) -> float:
         """Relative complementarity residual: zero for an exact solution.
 
@@ -290,7 +304,7 @@ class Body:
         tangential = Q - np.clip(Q - self.cx * ds, -bound, bound)
         totals = [0.0]
         if control.T is not None:
-            totals.append(abs(Q.sum() - control.T))
+            totals.append(abs(Q.sum() + control.machine * dx - control.T))
         if control.N is not None:
             totals.append(abs(P.sum() - control.N))
         scale = max(float(np.abs(P).max()), 1e-300)
@@ -335,7 +349,7 @@ class Body:
         dx = max(dx_floor, float((u[self.ix] - s_prev)[state == SLIP].max(initial=dx_floor)))
         P, Q = r[self.iy], r[self.ix]
         ds = u[self.ix] - dx - s_prev
-        residual = self.residual(P, Q, gap, ds, np.full(self.n, dynamic), sliding)
+        residual = self.residual(P, Q, gap, ds, np.full(self.n, dynamic), sliding, dx)
         wave = np.where(state == SLIP, 0, -1).astype(np.int16)
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state,
                          direction=np.where(state == SLIP, np.sign(ds), 0).astype(np.int8),
@@ -352,9 +366,15 @@ class _Plan:
     """The factorised linear problem of one zone state (either form)."""
 
     def __init__(
-        self, body: Body, state: np.ndarray, mu: np.ndarray, kinds: tuple[bool, ...]
+        self,
+        body: Body,
+        state: np.ndarray,
+        mu: np.ndarray,
+        kinds: tuple[bool, ...],
+        machine: float = 0.0,
     ) -> None:
         self.body = body
+        self.machine = machine
         self.dx_unknown, self.dy_unknown, self.T_given, self.N_given = kinds
         ix, iy = body.ix, body.iy
         self.stick = state == STICK
@@ -395,6 +415,8 @@ class _Plan:
         flat = K @ np.stack([self.along_x, self.along_y], axis=1)
         self.flat_x = self._equations(flat[:, 0])
         self.flat_y = self._equations(flat[:, 1])
+        if self.T_given:
+            self.flat_x[self.rows.size] += self.machine  # the machine spring on the flat
         columns = [M]
         if self.dx_unknown:
             columns.append(self.flat_x[:, None])
@@ -445,6 +467,8 @@ class _Plan:
         if self.N_given:
             extra.append(np.concatenate([zeros, np.ones(self.n_stick), np.ones(self.mu_slip.size)]))
         padded = [np.pad(row, (0, width - row.size)) for row in extra]
+        if self.T_given and self.dx_unknown:
+            padded[0][2 * self.n_stick + self.mu_slip.size] = self.machine
         return np.vstack([M, *padded]) if padded else M
 
     def _solve(self, b: np.ndarray) -> np.ndarray:

@@ -63,6 +63,12 @@ class LoadPath:
     travel_step
         Flat travel (mm) per increment past gross sliding; by default the travel
         that raises T by ``tangential_step`` while the whole contact sticks.
+    machine_stiffness
+        If set (N/mm, full width), the tangential phase is driven from the start
+        by an actuator through a spring of this stiffness between it and the
+        flat, in ``travel_step`` increments of the actuator up to ``max_travel``
+        (both then required): T = k (X - DT), so a slip releases load and the
+        flat's travel DT shows it, as on the bench.
     max_tangential_load
         Stop the load-controlled phase there (N) if the contact has not slid by
         then; by default four times ``normal_load``. Under a held normal
@@ -79,6 +85,7 @@ class LoadPath:
     normal_control: Literal["displacement", "force"] = "displacement"
     max_travel: float | None = None
     travel_step: float | None = None
+    machine_stiffness: float | None = None
     max_tangential_load: float | None = None
     max_steps: int = 5000
 
@@ -87,6 +94,11 @@ class LoadPath:
             raise SlipwaveError("normal_load, tangential_step and normal_steps must be positive")
         if self.normal_control not in ("displacement", "force"):
             raise SlipwaveError(f"normal_control {self.normal_control!r}: displacement or force")
+        if self.machine_stiffness is not None and not (
+            self.machine_stiffness > 0 and self.max_travel and self.travel_step
+        ):
+            raise SlipwaveError("a machine drive needs machine_stiffness > 0, max_travel and "
+                                "travel_step")
 
 
 @dataclass
@@ -126,7 +138,7 @@ class _Run:
 
     def _split(self, start: Control, end: Control, depth: int) -> Increment:
         """Sub-stepping: reach ``end`` from ``start`` in two halves, recursively."""
-        halfway = Control(**{
+        halfway = Control(machine=end.machine, **{
             key: None if getattr(end, key) is None else
             0.5 * (getattr(start, key) + getattr(end, key))
             for key in ("dx", "dy", "T", "N")
@@ -157,7 +169,14 @@ class _Run:
         self.guess = increment.state
         self.guess_sign = increment.sign
 
-    def record(self, increment: Increment, phase: str, *, advanced: bool = False) -> None:
+    def record(
+        self,
+        increment: Increment,
+        phase: str,
+        *,
+        advanced: bool = False,
+        actuator: float = float("nan"),
+    ) -> None:
         """Keep a step (``advanced``: the sub-stepping has already moved the state)."""
         if not advanced:
             self._advance(increment)
@@ -170,7 +189,22 @@ class _Run:
         if wave.any():
             kind = "gross" if contact.any() and wave[contact].all() else "partial"
         sensors = self.condensed.sensors @ increment.u
+        u_before = increment.u if increment.u_before is None else increment.u_before
+        before = self.condensed.sensors @ u_before
+        r_before = self.body.K @ u_before
+        n = self.body.n
         self.steps.append({
+            "ux": increment.u[:n].copy(),
+            "uy": increment.u[n:].copy(),
+            "ux_before_wave": u_before[:n].copy(),
+            "uy_before_wave": u_before[n:].copy(),
+            "T_before_wave": width * float(r_before[:n].sum()),
+            "N_before_wave": width * float(r_before[n:].sum()),
+            "DG_before_wave": float(before[0]),
+            "DD_before_wave": float(before[1]),
+            "DT_before_wave": increment.dx_before if increment.u_before is not None
+            else increment.dx,
+            "actuator": actuator,
             "state": increment.state.copy(),
             "slip_direction": increment.direction.copy(),
             "cascade_round": increment.round_slipped.copy(),
@@ -261,7 +295,7 @@ def simulate(
     step_travel = path.tangential_step / width / _stick_stiffness(body, path.normal_control)
     k = 1
     cap = path.max_tangential_load or 4.0 * path.normal_load
-    while len(run.steps) < path.max_steps:
+    while path.machine_stiffness is None and len(run.steps) < path.max_steps:
         if start_T + k * path.tangential_step / width > cap / width + 1e-12:
             break
         previous = hold(T=start_T + (k - 1) * path.tangential_step / width)
@@ -279,7 +313,9 @@ def simulate(
             break
 
     run.reached_gross = run.gross
-    if path.max_travel is not None:
+    if path.machine_stiffness is not None:
+        _drive_through_machine(run, path, hold)
+    elif path.max_travel is not None:
         travel_step = path.travel_step or step_travel
         dx = run.steps[-1]["DT"]
         while dx < path.max_travel - 1e-12 and len(run.steps) < path.max_steps:
@@ -288,6 +324,29 @@ def simulate(
             run.advance(previous, hold(dx=dx), "tangential")
 
     return _to_dataset(run, path)
+
+
+def _drive_through_machine(run: _Run, path: LoadPath, hold: Any) -> None:
+    """The tangential phase driven by an actuator through the machine's spring."""
+    assert path.machine_stiffness and path.max_travel and path.travel_step
+    machine = path.machine_stiffness / run.slab.width
+    start = run.steps[-1]["T"] / run.slab.width  # the actuator starts where T is
+    steps = int(np.ceil(path.max_travel / path.travel_step - 1e-9))
+    previous = hold(T=start, machine=machine)
+    for k in range(1, steps + 1):
+        if len(run.steps) >= path.max_steps:
+            break
+        actuator = min(k * path.travel_step, path.max_travel)
+        control = hold(T=start + machine * actuator, machine=machine)
+        try:
+            increment = run._attempt(control)
+        except NotConverged:
+            run.record(run._split(previous, control, depth=1), "tangential", advanced=True,
+                       actuator=actuator)
+        else:
+            run.record(increment, "tangential", actuator=actuator)
+        run.reached_gross = run.reached_gross or run.gross
+        previous = control
 
 
 def _stick_stiffness(body: Body, normal_control: str) -> float:
@@ -347,6 +406,14 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         "slip": (node, stack("slip"), {"units": "mm",
                                        "long_name": "accumulated slip of the slab relative "
                                                     "to the flat"}),
+        "ux": (node, stack("ux"), {"units": "mm",
+                                   "long_name": "tangential displacement of the contact nodes"}),
+        "uy": (node, stack("uy"), {"units": "mm",
+                                   "long_name": "normal displacement of the contact nodes"}),
+        "ux_before_wave": (node, stack("ux_before_wave"), {
+            "units": "mm", "long_name": "ux in the stuck state of the step, before its wave"}),
+        "uy_before_wave": (node, stack("uy_before_wave"), {
+            "units": "mm", "long_name": "uy in the stuck state of the step, before its wave"}),
         "T": ("step", column("T"), {"units": "N", "long_name": "tangential load"}),
         "N": ("step", column("N"), {"units": "N", "long_name": "normal load",
                                     "comment": "compressive load, positive"}),
@@ -359,6 +426,12 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         "DT": ("step", column("DT"), {"units": "mm", "long_name": "flat displacement"}),
         "approach": ("step", column("approach"), {"units": "mm",
                                                   "long_name": "normal approach of the flat"}),
+        "actuator": ("step", column("actuator"), {
+            "units": "mm", "long_name": "actuator travel (machine drive; NaN otherwise)"}),
+        **{f"{name}_before_wave": ("step", column(f"{name}_before_wave"), {
+            "units": units, "long_name": f"{name} in the stuck state of the step, before its "
+            "wave (the peak)"}) for name, units in
+            (("T", "N"), ("N", "N"), ("DG", "mm"), ("DD", "mm"), ("DT", "mm"))},
         "phase": ("step", column("phase").astype(str), {"long_name": "load phase"}),
         "wave": ("step", column("wave").astype(str), {
             "long_name": "nodes that slipped in the step: none, partial or gross (all)"}),
