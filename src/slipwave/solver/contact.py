@@ -217,12 +217,12 @@ class Body:
                 mu = limit * sign
                 u, dx, dy = self.solve_linear(state, mu, s_prev, control)
                 r = self.K @ u
-                P, Q = r[self.iy], r[self.ix]
-                gap = self.g0 + u[self.iy] - dy
-                ds = u[self.ix] - dx - s_prev
+                Q, P = r[:n], r[n:]  # ix and iy are the two halves
+                gap = self.g0 + u[n:] - dy
+                ds = u[:n] - dx - s_prev
                 pressure = P - self.cy * gap
                 trial = Q - self.cx * ds
-                new = np.where(pressure > 0, STICK, OPEN).astype(np.int8)
+                new = (pressure > 0).view(np.int8).copy()  # OPEN 0, STICK 1
                 bound = limit * np.maximum(pressure, 0.0)
                 slipping = (new == STICK) & may_slip & (np.abs(trial) > bound)
                 new[slipping] = SLIP
@@ -236,7 +236,7 @@ class Body:
                     new[np.argmin(excess)] = STICK
                     slipping = new == SLIP
                 new_sign = np.where(slipping, np.sign(trial), sign)
-                if np.array_equal(new, state) and np.array_equal(new_sign, sign):
+                if (new == state).all() and (new_sign == sign).all():
                     break
                 key = new.tobytes() + new_sign.tobytes()
                 if key in seen:
@@ -383,10 +383,14 @@ class _Plan:
         self.mu_slip = mu[self.slip]
         n_open = body.n - int(self.contact.sum())
         self.compliance = body.C is not None and int(self.stick.sum()) < n_open
+        self.stick_x = ix[self.stick]
+        self.contact_y = iy[self.contact]
+        self.slip_x = ix[self.slip]
+        self.slip_y = iy[self.slip]
         self.along_x = np.zeros(2 * body.n)
-        self.along_x[ix[self.stick]] = 1.0
+        self.along_x[self.stick_x] = 1.0
         self.along_y = np.zeros(2 * body.n)
-        self.along_y[iy[self.contact]] = 1.0
+        self.along_y[self.contact_y] = 1.0
         matrix = self._compliance_matrix() if self.compliance else self._stiffness_matrix()
         self.size = matrix.shape[0]
         if self.size:
@@ -427,13 +431,14 @@ class _Plan:
     def _equations(self, force: np.ndarray) -> np.ndarray:
         """The equations' left-hand sides for a displacement whose forces are ``force``."""
         body = self.body
-        rows = force[self.rows].copy()
-        rows[self.first_slip_row :] -= self.mu_slip * force[body.iy[self.slip]]
+        rows = force[self.rows]
+        rows[self.first_slip_row :] -= self.mu_slip * force[self.slip_y]
+        n = body.n
         extra = []
         if self.T_given:
-            extra.append(force[body.ix].sum())
+            extra.append(force[:n].sum())
         if self.N_given:
-            extra.append(force[body.iy].sum())
+            extra.append(force[n:].sum())
         return np.concatenate([rows, extra]) if extra else rows
 
     # Compliance form: unknown forces Q, P of stuck nodes and P of slipping ones.
@@ -493,18 +498,18 @@ class _Plan:
             z = self._solve(np.concatenate([b, totals]))
             n_stick, n_slip = self.n_stick, self.mu_slip.size
             r = np.zeros(2 * body.n)
-            r[body.ix[self.stick]] = z[:n_stick]
-            r[body.iy[self.stick]] = z[n_stick : 2 * n_stick]
-            r[body.iy[self.slip]] = z[2 * n_stick : 2 * n_stick + n_slip]
-            r[body.ix[self.slip]] = self.mu_slip * r[body.iy[self.slip]]
+            r[self.stick_x] = z[:n_stick]
+            r[self.stick_x + body.n] = z[n_stick : 2 * n_stick]
+            r[self.slip_y] = z[2 * n_stick : 2 * n_stick + n_slip]
+            r[self.slip_x] = self.mu_slip * r[self.slip_y]
             k = 2 * n_stick + n_slip
             dx = control.dx if control.dx is not None else float(z[k])
             dy = control.dy if control.dy is not None else float(z[-1])
             assert body.C is not None
             return body.C @ r, dx, dy
         base = np.zeros(2 * body.n)
-        base[body.ix[self.stick]] = s_prev[self.stick]
-        base[body.iy[self.contact]] = -body.g0[self.contact]
+        base[self.stick_x] = s_prev[self.stick]
+        base[self.contact_y] = -body.g0[self.contact]
         b = np.zeros(self.size) if self.size else np.zeros(0)
         b[len(b) - len(totals):] = totals
         b -= self._equations(body.K @ base)

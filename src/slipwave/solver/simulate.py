@@ -116,6 +116,9 @@ class _Run:
     guess_sign: np.ndarray | None = None
     reached_gross: bool = False
 
+    def __post_init__(self) -> None:
+        self.tributary = self.slab.tributary_length
+
     def advance(self, previous: Control, control: Control, phase: str) -> None:
         """Solve the increment from ``previous`` to ``control`` and keep it.
 
@@ -181,7 +184,7 @@ class _Run:
         if not advanced:
             self._advance(increment)
         width = self.slab.width
-        tributary = self.slab.tributary_length
+        tributary = self.tributary
         P, Q = increment.r[self.body.iy], increment.r[self.body.ix]
         contact = increment.state != OPEN
         wave = increment.round_slipped >= 0
@@ -190,8 +193,11 @@ class _Run:
             kind = "gross" if contact.any() and wave[contact].all() else "partial"
         sensors = self.condensed.sensors @ increment.u
         u_before = increment.u if increment.u_before is None else increment.u_before
-        before = self.condensed.sensors @ u_before
-        r_before = self.body.K @ u_before
+        if u_before is increment.u:
+            before, r_before = sensors, increment.r
+        else:
+            before = self.condensed.sensors @ u_before
+            r_before = self.body.K @ u_before
         n = self.body.n
         self.steps.append({
             "ux": increment.u[:n].copy(),
