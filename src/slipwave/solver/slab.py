@@ -204,8 +204,20 @@ def _condensed_unit(slab: Slab) -> Condensed:
     return result
 
 
-def assemble_condensed(slab: Slab) -> Condensed:
-    """Assemble the slab with scikit-fem and condense it (no cache)."""
+@dataclass(frozen=True)
+class _Assembly:
+    """The slab's stiffness with the holder applied, and where its dofs are."""
+
+    reduced: sp.csc_matrix
+    basis: sp.csr_matrix
+    locations: np.ndarray
+    is_x: np.ndarray
+    kept: np.ndarray
+    interior: np.ndarray
+    n_contact: int
+
+
+def _assemble(slab: Slab) -> _Assembly:
     E = slab.youngs_modulus
     nu = slab.poisson_ratio
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))
@@ -250,26 +262,86 @@ def assemble_condensed(slab: Slab) -> Condensed:
                                      shape=(stiffness.shape[0], 1)))
     basis = sp.hstack(columns).tocsr()
     reduced = (basis.T @ stiffness @ basis).tocsc()
-
     position = np.full(stiffness.shape[0], -1)
     position[free] = np.arange(free.size)
     kept_r = position[kept]
     interior = np.setdiff1d(np.arange(reduced.shape[0]), kept_r)
-    k_ii = reduced[interior][:, interior].tocsc()
-    k_ik = reduced[interior][:, kept_r].toarray()
-    k_kk = reduced[kept_r][:, kept_r].toarray()
-    factor = spla.splu(k_ii, permc_spec="COLAMD")
-    schur = k_kk - reduced[kept_r][:, interior] @ factor.solve(k_ik)
-    schur = 0.5 * (schur + schur.T)
+    return _Assembly(reduced, basis, locations, is_x, kept_r, interior,
+                     contact_x.size + contact_y.size)
 
-    # The sensor dofs carry no load: condense them too, keeping their response.
-    n2 = contact_x.size + contact_y.size
-    k_cc, k_co, k_oo = schur[:n2, :n2], schur[:n2, n2:], schur[n2:, n2:]
-    sensors = -np.linalg.solve(k_oo, k_co.T)
+
+def _interior_response(assembly: _Assembly) -> tuple[np.ndarray, np.ndarray]:
+    """(K_ik, K_ii^-1 K_ik): the interior's coupling to and response to the kept dofs."""
+    reduced, interior, kept = assembly.reduced, assembly.interior, assembly.kept
+    k_ii = reduced[interior][:, interior].tocsc()
+    k_ik = reduced[interior][:, kept].toarray()
+    return k_ik, spla.splu(k_ii, permc_spec="COLAMD").solve(k_ik)
+
+
+def _condense_sensors(schur: np.ndarray, n_contact: int) -> tuple[np.ndarray, np.ndarray]:
+    """The sensor dofs carry no load: condense them too, keeping their response."""
+    k_cc, k_co = schur[:n_contact, :n_contact], schur[:n_contact, n_contact:]
+    sensors = -np.linalg.solve(schur[n_contact:, n_contact:], k_co.T)
     contact = k_cc + k_co @ sensors
-    contact = 0.5 * (contact + contact.T)
+    return 0.5 * (contact + contact.T), sensors
+
+
+def assemble_condensed(slab: Slab) -> Condensed:
+    """Assemble the slab with scikit-fem and condense it (no cache)."""
+    assembly = _assemble(slab)
+    k_ik, response = _interior_response(assembly)
+    kept = assembly.kept
+    schur = assembly.reduced[kept][:, kept].toarray() - k_ik.T @ response
+    contact, sensors = _condense_sensors(0.5 * (schur + schur.T), assembly.n_contact)
     held = np.linalg.cond(contact) < _MAX_CONDITION
     return Condensed(contact, sensors, np.linalg.inv(contact) if held else None)
+
+
+@dataclass(frozen=True)
+class DisplacementRecovery:
+    """The slab's nodal displacements from its contact displacements.
+
+    Attributes
+    ----------
+    x, y
+        The mesh's node columns and rows (mm).
+    ux, uy
+        (rows, columns, 2n): ``ux @ u_contact`` is the tangential displacement
+        of every node, ``u_contact`` ordered as the solver's ``[ux, uy]``.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    ux: np.ndarray
+    uy: np.ndarray
+
+
+def displacement_recovery(slab: Slab) -> DisplacementRecovery:
+    """Linear map from contact displacements to every node's displacement.
+
+    The interior follows from the contact (no other load acts on the slab), so
+    the whole field of a solver step is ``recovery.ux @ [ux; uy]``.
+    """
+    assembly = _assemble(slab)
+    k_ik, response = _interior_response(assembly)
+    kept = assembly.kept
+    schur = assembly.reduced[kept][:, kept].toarray() - k_ik.T @ response
+    _, sensors = _condense_sensors(0.5 * (schur + schur.T), assembly.n_contact)
+    n2 = assembly.n_contact
+    of_contact = np.vstack([np.eye(n2), sensors])  # kept dofs from contact dofs
+    reduced_u = np.zeros((assembly.reduced.shape[0], n2))
+    reduced_u[kept] = of_contact
+    reduced_u[assembly.interior] = -response @ of_contact
+    full = np.asarray(assembly.basis @ reduced_u)
+    x, y = slab.x, slab.heights()
+    locations = assembly.locations
+    column = np.searchsorted(x, locations[0] - 1e-9 * slab.length)
+    row = np.searchsorted(y, locations[1] - 1e-9 * slab.length)
+    ux = np.zeros((y.size, x.size, n2))
+    uy = np.zeros((y.size, x.size, n2))
+    ux[row[assembly.is_x], column[assembly.is_x]] = full[assembly.is_x]
+    uy[row[~assembly.is_x], column[~assembly.is_x]] = full[~assembly.is_x]
+    return DisplacementRecovery(x=x, y=y, ux=ux, uy=uy)
 
 
 def _sorted_by_x(dofs: np.ndarray, locations: np.ndarray) -> np.ndarray:

@@ -1,0 +1,95 @@
+"""The photoelastic camera: stresses of the slab, fringe images, video files."""
+
+from __future__ import annotations
+
+import av
+import numpy as np
+import pytest
+import xarray as xr
+
+from slipwave.bench.camera import Camera, Photoelastic, write_video
+from slipwave.errors import SlipwaveError
+from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+
+SLAB = Slab(height=40.0, elements=80)
+
+
+@pytest.fixture(scope="module")
+def simulation() -> xr.Dataset:
+    return simulate(SLAB, Coulomb(fs=1.0), LoadPath(normal_load=85.0, normal_control="force"))
+
+
+@pytest.fixture(scope="module")
+def camera() -> Photoelastic:
+    return Photoelastic(SLAB, Camera(noise=0.0, blur=0.0))
+
+
+def contact(simulation: xr.Dataset, k: int) -> np.ndarray:
+    return np.concatenate([simulation["ux"].values[k], simulation["uy"].values[k]])
+
+
+@pytest.mark.parametrize("height", [12.0, 20.0, 30.0])
+def test_stress_resultants_on_a_horizontal_cut(simulation, camera, height):
+    k = int(np.flatnonzero(simulation["T"].values > 40.0)[0])
+    stress = np.zeros((3, *camera.inside.shape))
+    stress[:, camera.inside] = camera.stress(contact(simulation, k))
+    row = round(camera.interface_row - height * camera.scale)
+    pixel = 1.0 / camera.scale  # mm
+    normal = -stress[1, row].sum() * pixel * SLAB.width
+    shear = stress[2, row].sum() * pixel * SLAB.width
+    assert normal == pytest.approx(float(simulation["N"][k]), rel=0.03)
+    assert abs(shear) == pytest.approx(float(simulation["T"][k]), rel=0.03)
+
+
+def test_fringes_mirror_symmetric_after_pressing(simulation, camera):
+    k = int(np.flatnonzero(simulation["phase"].values == "normal")[-1])
+    image = camera.render(camera.stress(contact(simulation, k)), np.random.default_rng(0))
+    columns = np.flatnonzero(camera.inside.any(axis=0))
+    slab = image[:, columns[0] : columns[-1] + 1].astype(int)
+    assert np.abs(slab - slab[:, ::-1]).mean() < 2.0
+    orders = camera.fringe_order(camera.stress(contact(simulation, k)))
+    assert 2.0 < np.median(orders) < 20.0  # a readable number of fringes
+
+
+def test_shear_breaks_the_symmetry(simulation, camera):
+    k = int(np.flatnonzero(simulation["T"].values > 40.0)[0])
+    image = camera.render(camera.stress(contact(simulation, k)), np.random.default_rng(0))
+    columns = np.flatnonzero(camera.inside.any(axis=0))
+    slab = image[:, columns[0] : columns[-1] + 1].astype(int)
+    assert np.abs(slab - slab[:, ::-1]).mean() > 20.0
+
+
+@pytest.mark.parametrize("bits", [8, 16])
+def test_ffv1_is_lossless_and_keeps_timestamps(tmp_path, bits):
+    rng = np.random.default_rng(1)
+    top = 255 if bits == 8 else 65535
+    frames = [rng.integers(0, top, (160, 320)).astype(np.uint8 if bits == 8 else np.uint16)
+              for _ in range(4)]
+    times = [0.0, 0.04, 0.081, 0.12]  # a late frame: variable frame rate
+    path = write_video(frames, times, tmp_path / "v.mkv", codec="ffv1")
+    with av.open(str(path)) as container:
+        decoded = [(f.to_ndarray(), float(f.pts * f.time_base)) for f in container.decode(video=0)]
+    assert len(decoded) == 4
+    for frame, (back, time), expected in zip(frames, decoded, times, strict=True):
+        np.testing.assert_array_equal(back, frame)
+        assert time == pytest.approx(expected, abs=1e-4)
+
+
+def test_video_bytes_are_deterministic(tmp_path):
+    frames = [np.full((160, 320), 10 * k, dtype=np.uint8) for k in range(5)]
+    times = [k / 25 for k in range(5)]
+    for codec in ["ffv1", "h264"]:
+        a = write_video(frames, times, tmp_path / f"a.{codec}", codec=codec).read_bytes()
+        b = write_video(frames, times, tmp_path / f"b.{codec}", codec=codec).read_bytes()
+        assert a == b
+
+
+def test_h264_refuses_16_bit(tmp_path):
+    with pytest.raises(SlipwaveError, match="16-bit frames need"):
+        write_video([np.zeros((16, 16), np.uint16)], [0.0], tmp_path / "v.mp4", codec="h264")
+    assert not (tmp_path / "v.mp4").exists()
+
+
+def test_camera_clock():
+    camera = Camera(clock_offset=2.5, clock_rate_error=1e-3)
+    np.testing.assert_allclose(camera.acquisition_time(np.array([0.0, 100.0])), [2.5, 102.6])
