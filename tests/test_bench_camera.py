@@ -78,16 +78,29 @@ def test_ffv1_is_lossless_and_keeps_timestamps(tmp_path, bits):
 def test_video_bytes_are_deterministic(tmp_path):
     frames = [np.full((160, 320), 10 * k, dtype=np.uint8) for k in range(5)]
     times = [k / 25 for k in range(5)]
-    for codec in ["ffv1", "h264"]:
+    for codec in ["ffv1", "vp9"]:
         a = write_video(frames, times, tmp_path / f"a.{codec}", codec=codec).read_bytes()
         b = write_video(frames, times, tmp_path / f"b.{codec}", codec=codec).read_bytes()
         assert a == b
 
 
-def test_h264_refuses_16_bit(tmp_path):
+def test_vp9_refuses_16_bit(tmp_path):
     with pytest.raises(SlipwaveError, match="16-bit frames need"):
-        write_video([np.zeros((16, 16), np.uint16)], [0.0], tmp_path / "v.mp4", codec="h264")
-    assert not (tmp_path / "v.mp4").exists()
+        write_video([np.zeros((16, 16), np.uint16)], [0.0], tmp_path / "v.mkv", codec="vp9")
+    assert not (tmp_path / "v.mkv").exists()
+
+
+def test_vp9_keeps_the_grey_levels(tmp_path):
+    rng = np.random.default_rng(2)
+    y, x = np.mgrid[0:160, 0:320]
+    frames = [np.clip(128 + 100 * np.sin(x / 9.0 + k) * np.cos(y / 7.0)
+                      + rng.normal(0, 1.5, x.shape), 0, 255).astype(np.uint8) for k in range(6)]
+    path = write_video(frames, [k / 25 for k in range(6)], tmp_path / "v.mkv", codec="vp9")
+    with av.open(str(path)) as container:
+        luma = [f.to_ndarray(format="yuv420p")[:160].astype(float)
+                for f in container.decode(video=0)]
+    error = np.mean([np.mean((a - b) ** 2) for a, b in zip(luma, frames, strict=True)])
+    assert 10 * np.log10(255**2 / error) > 35.0
 
 
 def test_camera_clock():

@@ -269,11 +269,15 @@ def test_written_csv_reads_back(tmp_path, flavour):
         assert b"time [s],T [N]" in raw
 
 
-def test_provisional_campaign_files_read():
-    folder = Path(__file__).parents[1] / "raw_data" / "provisional"
+def test_default_campaign_files_read():
+    folder = Path(__file__).parents[1] / "raw_data" / "bench"
     files = sorted(folder.glob("*.csv"))
-    assert len(files) == 3
+    assert [f.name for f in files] == ["hl025.csv", "hl050.csv", "hl075.csv"]
     for path in files:
         ds = read_acquisition(path)
-        assert ds.sizes["time"] == 28000
-        assert float(np.abs(ds["N"]).max()) == pytest.approx(85.0, abs=1.0)
+        assert ds.sizes["time"] == 28000 and float(ds["time"][-1]) == pytest.approx(279.99)
+        assert float(ds["N"].values[-1]) == pytest.approx(-85.0, abs=1.5)
+        assert ds["N"].attrs["compression_sign"] == "negative"
+        assert 40.0 < float(ds["T"].max()) < 120.0 and ds.attrs["missing_channels"] == ""
+        assert ds.attrs["sync_time_s"] == 2.0
+    assert "decimal ','" in read_acquisition(folder / "hl025.csv").attrs["source_format"]

@@ -86,8 +86,7 @@ def test_column_map_from_config(workdir):
 )
 def test_wrong_config_fails_before_any_job(workdir, config, table, message):
     (workdir / "bad.yaml").write_text(config)
-    (workdir / "t.tsv").write_text(table or "test_id\tcsv\na\traw_data/provisional/"
-                                   "saw_hl050.csv\n")
+    (workdir / "t.tsv").write_text(table or "test_id\tcsv\na\traw_data/bench/hl050.csv\n")
     run = snakemake(workdir, "--cores", "1", "--configfile", "bad.yaml")
     assert run.returncode != 0
     assert message in run.stdout + run.stderr

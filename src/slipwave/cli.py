@@ -77,6 +77,23 @@ def _simulate(args: argparse.Namespace) -> None:
           f"behaviour {behaviour.label}")
 
 
+def _bench(args: argparse.Namespace) -> None:
+    import yaml
+
+    from slipwave.bench.generate import load_tests, write_campaign
+    from slipwave.errors import ConfigError
+
+    try:
+        config = yaml.safe_load(Path(args.config).read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as err:
+        raise ConfigError(f"{args.config}: cannot be read as YAML: {err}") from err
+    if not isinstance(config, dict):
+        raise ConfigError(f"{args.config}: expected a mapping with 'tests'")
+    table = write_campaign(load_tests(config), args.output, seed=args.seed,
+                           progress=not args.quiet)
+    print(f"{args.config} -> {args.output} ({table.name})")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``slipwave`` (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -132,6 +149,17 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     sim.add_argument("--plot", type=Path, default=None, help="also draw the zones (PNG, SVG)")
     sim.set_defaults(run=_simulate)
+
+    bench = commands.add_parser(
+        "bench", help="generate a virtual-bench campaign (CSVs, videos, truth)",
+        description="Simulate each test of CONFIG (YAML: defaults and tests) on the virtual "
+        "bench and write its acquisition CSV, video and ground truth.",
+    )
+    bench.add_argument("config", type=Path, help="campaign YAML")
+    bench.add_argument("-o", "--output", type=Path, required=True, help="campaign folder")
+    bench.add_argument("--seed", type=int, default=0, help="noise seed of the first test (0)")
+    bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.set_defaults(run=_bench)
 
     synth = commands.add_parser(
         "synth", help="write the provisional saw-tooth campaign (three CSVs)",

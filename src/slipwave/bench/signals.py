@@ -60,6 +60,23 @@ def wave_durations(simulation: xr.Dataset, *, wave_speed: float) -> np.ndarray:
     return extent / wave_speed
 
 
+def wave_windows(
+    simulation: xr.Dataset, *, speed: float, loading_time: float, wave_speed: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(start, peak, end) time of every step.
+
+    A step runs from ``start`` (the previous step's end) to ``end``; the stuck
+    response rises until ``peak``, and the step's wave, if any, runs from
+    ``peak`` to ``end``, taking the time it needs to sweep its extent (at most
+    half the step).
+    """
+    ends = step_times(simulation, speed=speed, loading_time=loading_time)
+    starts = np.concatenate([[0.0], ends[:-1]])
+    waves = wave_durations(simulation, wave_speed=wave_speed)
+    peaks = ends - np.minimum(waves, 0.5 * (ends - starts))
+    return starts, peaks, ends
+
+
 def clean_signals(
     simulation: xr.Dataset,
     *,
@@ -85,24 +102,19 @@ def clean_signals(
     >>> ds.sizes["time"], round(float(ds["N"][60]), 6)
     (250, -85.0)
     """
-    ends = step_times(simulation, speed=speed, loading_time=loading_time)
+    starts, peaks, ends = wave_windows(simulation, speed=speed, loading_time=loading_time,
+                                       wave_speed=wave_speed)
     if duration > ends[-1] + 1e-9:
         raise SlipwaveError(f"the simulation covers {ends[-1]:.3f} s, less than the "
                             f"{duration} s asked")
-    starts = np.concatenate([[0.0], ends[:-1]])
-    waves = wave_durations(simulation, wave_speed=wave_speed)
     time = np.arange(round(duration * sample_rate)) / sample_rate
     k = np.searchsorted(ends, time, side="left")  # the step each sample belongs to
+    rising, falling = step_progress(time, k, starts, peaks, ends)
     signals = {}
     for name in CHANNELS:
         final = simulation[name].values
         peak = simulation[f"{name}_before_wave"].values
         start_value = np.concatenate([[0.0], final[:-1]])
-        # The stuck response from the previous step's state to this step's peak, the
-        # wave taking the part of the step it needs at its end.
-        ramp_end = ends - np.minimum(waves, 0.5 * (ends - starts))
-        rising = np.clip((time - starts[k]) / np.maximum(ramp_end[k] - starts[k], 1e-12), 0, 1)
-        falling = np.clip((time - ramp_end[k]) / np.maximum(ends[k] - ramp_end[k], 1e-12), 0, 1)
         value = start_value[k] + (peak[k] - start_value[k]) * rising
         value = value + (final[k] - peak[k]) * falling
         signals[name] = CARD_SIGN[name] * value
@@ -112,6 +124,15 @@ def clean_signals(
         coords={"time": ("time", time, dict(CHANNEL_ATTRS["time"]))},
         attrs=attrs,
     )
+
+
+def step_progress(
+    time: np.ndarray, k: np.ndarray, starts: np.ndarray, peaks: np.ndarray, ends: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far the rise and the wave of step ``k`` have gone at ``time`` (0 to 1 each)."""
+    rising = np.clip((time - starts[k]) / np.maximum(peaks[k] - starts[k], 1e-12), 0, 1)
+    falling = np.clip((time - peaks[k]) / np.maximum(ends[k] - peaks[k], 1e-12), 0, 1)
+    return rising, falling
 
 
 @dataclass(frozen=True)

@@ -24,17 +24,32 @@ _MAX_SPLITS = 6  # sub-stepping depth: an increment is cut into at most 64 parts
 class Coulomb:
     """Coulomb friction with a static (stick limit) and a dynamic coefficient.
 
-    ``fd`` defaults to ``fs``.
+    ``fd`` defaults to ``fs``. An optional run-in makes the static coefficient
+    grow linearly from ``fs`` to ``fs_final`` over the first ``runin_slips``
+    gross slips (an interface whose adhesion builds up as it is worn in); the
+    dynamic one stays.
     """
 
     fs: float
     fd: float | None = None
+    fs_final: float | None = None
+    runin_slips: int = 0
 
     def __post_init__(self) -> None:
         if self.fd is None:
             object.__setattr__(self, "fd", self.fs)
         if not (0.0 <= self.dynamic <= self.fs and np.isfinite(self.fs)):
             raise SlipwaveError(f"friction needs 0 <= fd <= fs, got fs={self.fs}, fd={self.fd}")
+        if self.fs_final is not None and not (self.fs_final >= self.dynamic
+                                              and self.runin_slips > 0):
+            raise SlipwaveError("a run-in needs fs_final >= fd and runin_slips > 0")
+
+    def static_after(self, gross_slips: int) -> float:
+        """The static coefficient after ``gross_slips`` gross slips."""
+        if self.fs_final is None:
+            return self.fs
+        progress = min(gross_slips / self.runin_slips, 1.0)
+        return self.fs + (self.fs_final - self.fs) * progress
 
     @property
     def dynamic(self) -> float:
@@ -115,6 +130,7 @@ class _Run:
     guess: np.ndarray | None = None
     guess_sign: np.ndarray | None = None
     reached_gross: bool = False
+    gross_slips: int = 0
 
     def __post_init__(self) -> None:
         self.tributary = self.slab.tributary_length
@@ -132,7 +148,7 @@ class _Run:
             self.record(increment, phase)
 
     def _attempt(self, control: Control) -> Increment:
-        fs, fd = self.friction.fs, self.friction.dynamic
+        fs, fd = self.friction.static_after(self.gross_slips), self.friction.dynamic
         increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess,
                                               self.guess_sign)
         if not increment.residual <= RESIDUAL_TOLERANCE:
@@ -226,9 +242,14 @@ class _Run:
             "approach": increment.dy,
             "phase": phase,
             "wave": kind,
+            "static_friction": self.friction.static_after(self.gross_slips),
             "residual": increment.residual,
             "iterations": increment.iterations,
         })
+
+    def count_gross(self) -> None:
+        """After recording: one more gross slip if the last step was one."""
+        self.gross_slips += int(self.gross)
 
     @property
     def gross(self) -> bool:
@@ -352,6 +373,7 @@ def _drive_through_machine(run: _Run, path: LoadPath, hold: Any) -> None:
         else:
             run.record(increment, "tangential", actuator=actuator)
         run.reached_gross = run.reached_gross or run.gross
+        run.count_gross()
         previous = control
 
 
@@ -441,6 +463,8 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         "phase": ("step", column("phase").astype(str), {"long_name": "load phase"}),
         "wave": ("step", column("wave").astype(str), {
             "long_name": "nodes that slipped in the step: none, partial or gross (all)"}),
+        "static_friction": ("step", column("static_friction"), {
+            "units": "1", "long_name": "static friction coefficient in force during the step"}),
         "residual": ("step", column("residual"), {
             "units": "1", "long_name": "relative complementarity residual"}),
         "iterations": ("step", column("iterations").astype(np.int32), {
@@ -464,6 +488,9 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
     attrs["slab_profile"] = "flat" if slab.profile is None else repr(slab.profile)
     attrs["friction_fs"] = run.friction.fs
     attrs["friction_fd"] = run.friction.dynamic
+    if run.friction.fs_final is not None:
+        attrs["friction_fs_final"] = run.friction.fs_final
+        attrs["friction_runin_slips"] = run.friction.runin_slips
     attrs.update({f"path_{k}": ("none" if v is None else v) for k, v in asdict(path).items()})
     attrs["gross_sliding"] = "reached" if run.reached_gross else (
         "not reached: the tangential load cap or step limit came first")

@@ -1,0 +1,335 @@
+"""One virtual bench test: recording, video and ground truth, from the solver.
+
+:func:`simulate_test` runs the contact solver along the bench's load path
+(normal loading, then the flat driven by an actuator through the machine's
+spring, past gross sliding), samples it like the acquisition card, records it
+through the sensors, films it with the photoelastic camera and lists the truth:
+every wave with its kind, times, extent and direction, and the phase of every
+sample. :func:`write_test` writes the files a real test would leave, and the
+truth beside them.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+from tqdm import tqdm
+
+from slipwave.bench.camera import Camera, Photoelastic, write_video
+from slipwave.bench.signals import (
+    DEFAULT_SENSORS,
+    apply_sensors,
+    clean_signals,
+    step_progress,
+    wave_windows,
+)
+from slipwave.errors import SlipwaveError
+from slipwave.io import CONVENTIONS, atomic_output, write_acquisition
+from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+
+LED_DURATION = 0.2  # s the sync LED stays lit
+FRONT_WIDTH = 4.0  # mm over which a wave front blends the states before and after it
+
+
+@dataclass(frozen=True)
+class BenchTest:
+    """Everything that defines a virtual test (mm, N, s).
+
+    The interface follows Coulomb's law with a static coefficient that grows
+    from ``fs`` to ``fs_final`` over the first ``runin_slips`` gross slips
+    (run-in) and a dynamic one ``fd``. Waves whose T drop is below
+    ``min_event_drop`` (micro-slips at the edge of the contact) are listed in
+    the truth as not visible.
+    """
+
+    test_id: str
+    height: float = 40.0
+    length: float = 80.0
+    width: float = 10.0
+    youngs_modulus: float = 7.0
+    poisson_ratio: float = 0.48
+    elements: int = 160
+    fs: float = 0.9
+    fd: float = 0.6
+    fs_final: float | None = 1.3
+    runin_slips: int = 4
+    normal_load: float = 85.0
+    speed: float = 0.048
+    duration: float = 280.0
+    loading_time: float = 10.0
+    machine_stiffness: float = 40.0
+    travel_step: float = 0.03
+    wave_speed: float = 200.0
+    sample_rate: float = 100.0
+    min_event_drop: float = 0.5
+    sync_time: float = 2.0
+    flavour: Literal["canonical", "vendor"] = "canonical"
+    video: Literal["ffv1", "vp9", "none"] = "vp9"
+    camera: Camera = field(default_factory=Camera)
+
+    def slab(self) -> Slab:
+        """The slab of this test."""
+        return Slab(length=self.length, height=self.height, width=self.width,
+                    youngs_modulus=self.youngs_modulus, poisson_ratio=self.poisson_ratio,
+                    elements=self.elements)
+
+    def friction(self) -> Coulomb:
+        """The interface's friction law."""
+        runin = self.runin_slips if self.fs_final is not None else 0
+        return Coulomb(fs=self.fs, fd=self.fd, fs_final=self.fs_final, runin_slips=runin)
+
+    def load_path(self) -> LoadPath:
+        """The bench's load path: N held, the flat driven through the machine."""
+        travel = self.speed * (self.duration - self.loading_time) + 2 * self.travel_step
+        return LoadPath(normal_load=self.normal_load, normal_control="force",
+                        machine_stiffness=self.machine_stiffness, max_travel=travel,
+                        travel_step=self.travel_step)
+
+
+@dataclass
+class BenchResult:
+    """A generated test: what the card and the camera recorded, and the truth."""
+
+    spec: BenchTest
+    simulation: xr.Dataset
+    recording: xr.Dataset
+    events: pd.DataFrame
+    phases: pd.DataFrame
+    frame_times: np.ndarray
+    seed: int
+
+    def frames(self) -> Iterator[np.ndarray]:
+        """The video's frames, rendered one at a time (memory does not grow)."""
+        yield from _render(self)
+
+
+def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
+    """Generate one test in memory: recording, truth and a frame iterator.
+
+    Examples
+    --------
+    >>> result = simulate_test(BenchTest("demo", elements=40, duration=40.0, video="none"))
+    >>> result.recording.attrs["test_id"], result.recording.sizes["time"]
+    ('demo', 4000)
+    """
+    simulation = simulate(spec.slab(), spec.friction(), spec.load_path())
+    clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
+                          duration=spec.duration, sample_rate=spec.sample_rate,
+                          wave_speed=spec.wave_speed)
+    recording = apply_sensors(clean, DEFAULT_SENSORS, seed=seed)
+    recording.attrs = {
+        "test_id": spec.test_id,
+        "sample_rate_hz": spec.sample_rate,
+        "length_mm": spec.length,
+        "height_mm": spec.height,
+        "width_mm": spec.width,
+        "speed_mm_s": spec.speed,
+        "normal_load_n": spec.normal_load,
+        "sync_time_s": spec.sync_time,
+        "camera_fps": spec.camera.fps,
+        "generator": "slipwave virtual bench",
+        "Conventions": CONVENTIONS,
+    }
+    events = _events(spec, simulation)
+    phases = _phases(spec, events, clean["time"].values)
+    camera_end = (spec.duration - spec.camera.clock_offset) / (1 + spec.camera.clock_rate_error)
+    frame_times = np.arange(0.0, camera_end, 1.0 / spec.camera.fps)
+    frame_times = frame_times[spec.camera.acquisition_time(frame_times) >= 0.0]
+    return BenchResult(spec, simulation, recording, events, phases, frame_times, seed)
+
+
+def _direction(first: float, last: float) -> str:
+    return "right_to_left" if last < first else "left_to_right"
+
+
+def _events(spec: BenchTest, simulation: xr.Dataset) -> pd.DataFrame:
+    _, peaks, ends = wave_windows(simulation, speed=spec.speed,
+                                       loading_time=spec.loading_time,
+                                       wave_speed=spec.wave_speed)
+    x = simulation["x"].values
+    rows = []
+    for k in np.flatnonzero(simulation["wave"].values != "none"):
+        if ends[k] > spec.duration or simulation["phase"].values[k] != "tangential":
+            continue
+        order = simulation["cascade_round"].values[k]
+        slipped = order >= 0
+        first = float(x[slipped & (order <= np.quantile(order[slipped], 0.1))].mean())
+        last = float(x[slipped & (order >= np.quantile(order[slipped], 0.9))].mean())
+        T0, T1 = float(simulation["T_before_wave"][k]), float(simulation["T"][k])
+        N0, N1 = float(simulation["N_before_wave"][k]), float(simulation["N"][k])
+        kind = "gross_slip" if simulation["wave"].values[k] == "gross" else "partial_slip"
+        contact = simulation["state"].values[k] != 0
+        rows.append({
+            "kind": kind,
+            "t_start": float(peaks[k]),
+            "t_end": float(ends[k]),
+            "x_first": first,
+            "x_last": last,
+            "x_min": float(x[slipped].min()),
+            "x_max": float(x[slipped].max()),
+            "swept_fraction": float((slipped & contact).sum() / max(contact.sum(), 1)),
+            "direction": _direction(first, last),
+            "T_before": T0,
+            "T_after": T1,
+            "N_before": N0,
+            "N_after": N1,
+            "ratio_before": T0 / N0,
+            "ratio_after": T1 / N1,
+            "drop": T0 - T1,
+            "DG_jump": float(simulation["DG"][k] - simulation["DG_before_wave"][k]),
+            "DD_jump": float(simulation["DD"][k] - simulation["DD_before_wave"][k]),
+            "static_friction": float(simulation["static_friction"][k]),
+            "step": int(k),
+        })
+    events = pd.DataFrame(rows)
+    if events.empty:
+        return events
+    events["visible"] = (events["kind"] == "gross_slip") | (events["drop"] >= spec.min_event_drop)
+    events.insert(0, "test_id", spec.test_id)
+    return events
+
+
+def _phases(spec: BenchTest, events: pd.DataFrame, time: np.ndarray) -> pd.DataFrame:
+    phase = np.where(time < spec.loading_time, "normal_loading", "stick").astype(object)
+    if not events.empty:
+        for kind in ("partial_slip", "gross_slip"):  # gross wins where both overlap
+            chosen = events[(events["kind"] == kind) & events["visible"]]
+            for start, end in zip(chosen["t_start"], chosen["t_end"], strict=True):
+                phase[(time >= start) & (time <= end)] = kind
+    return pd.DataFrame({"time": time, "phase": phase})
+
+
+def _render(result: BenchResult) -> Iterator[np.ndarray]:
+    spec, simulation = result.spec, result.simulation
+    camera = Photoelastic(spec.slab(), spec.camera)
+    starts, peaks, ends = wave_windows(simulation, speed=spec.speed,
+                                       loading_time=spec.loading_time,
+                                       wave_speed=spec.wave_speed)
+    ux, uy = simulation["ux"].values, simulation["uy"].values
+    ux0, uy0 = simulation["ux_before_wave"].values, simulation["uy_before_wave"].values
+    order = simulation["cascade_round"].values
+    x = simulation["x"].values
+    rng = np.random.default_rng([result.seed, 99])
+    cache: dict[tuple[int, str], np.ndarray] = {}
+
+    def stress(k: int, which: str) -> np.ndarray:
+        key = (k, which)
+        if key not in cache:
+            if len(cache) > 8:
+                cache.pop(next(iter(cache)))
+            if k < 0:
+                cache[key] = np.zeros((3, camera.pixel_x.size))
+            elif which == "final":
+                cache[key] = camera.stress(np.concatenate([ux[k], uy[k]]))
+            else:
+                cache[key] = camera.stress(np.concatenate([ux0[k], uy0[k]]))
+        return cache[key]
+
+    times = spec.camera.acquisition_time(result.frame_times)
+    steps = np.searchsorted(ends, times, side="left")
+    rising, falling = step_progress(times, steps, starts, peaks, ends)
+    for t, k, up, down in zip(times, steps, rising, falling, strict=True):
+        k = int(min(k, ends.size - 1))
+        before = stress(k - 1, "final")
+        peak = stress(k, "peak")
+        field = before + (peak - before) * up
+        if down > 0:
+            slipped = order[k] >= 0
+            first = x[slipped & (order[k] <= np.quantile(order[k][slipped], 0.1))].mean()
+            last = x[slipped & (order[k] >= np.quantile(order[k][slipped], 0.9))].mean()
+            front = first + (last - first) * down
+            # Pixels the front has passed show the state after the wave, across a
+            # smooth band of FRONT_WIDTH mm.
+            passed = (camera.pixel_x - front) * np.sign(first - last) / FRONT_WIDTH + 0.5
+            weight = np.clip(passed, 0.0, 1.0)
+            field = field + (stress(k, "final") - field) * weight
+        led = spec.sync_time <= t < spec.sync_time + LED_DURATION
+        yield camera.render(field, rng, led=bool(led))
+
+
+def write_test(result: BenchResult, folder: str | PathLike[str]) -> dict[str, Path]:
+    """Write a test's CSV, video and truth (under ``truth/``) into ``folder``.
+
+    Returns
+    -------
+    dict
+        The paths written: ``csv``, ``video`` (if any), ``events``, ``phases``,
+        ``parameters``.
+    """
+    folder = Path(folder)
+    spec = result.spec
+    paths: dict[str, Path] = {}
+    paths["csv"] = write_acquisition(result.recording, folder / f"{spec.test_id}.csv",
+                                     flavour=spec.flavour, float_format="%.7g")
+    if spec.video != "none":
+        paths["video"] = write_video(result.frames(), result.frame_times,
+                                     folder / f"{spec.test_id}.mkv", codec=spec.video,
+                                     fps=spec.camera.fps)
+    truth = folder / "truth"
+    paths["events"] = truth / f"{spec.test_id}_events.csv"
+    paths["phases"] = truth / f"{spec.test_id}_phases.csv"
+    paths["parameters"] = truth / f"{spec.test_id}.json"
+    with atomic_output(paths["events"]) as temporary:
+        result.events.to_csv(temporary, index=False, float_format="%.6g")
+    with atomic_output(paths["phases"]) as temporary:
+        result.phases.to_csv(temporary, index=False, float_format="%.6g")
+    gross = result.events[result.events["kind"] == "gross_slip"] if not result.events.empty \
+        else result.events
+    summary: dict[str, Any] = {
+        "test": asdict(spec),
+        "seed": result.seed,
+        "files": {key: path.name for key, path in paths.items()},
+        "ratio_at_gross_slips": [] if gross.empty else gross["ratio_before"].round(6).tolist(),
+        "events": int(result.events["visible"].sum()) if not result.events.empty else 0,
+    }
+    with atomic_output(paths["parameters"]) as temporary:
+        temporary.write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
+    return paths
+
+
+def load_tests(config: dict[str, Any]) -> list[BenchTest]:
+    """Tests of a campaign config: ``defaults`` merged into each of ``tests``."""
+    defaults = dict(config.get("defaults") or {})
+    tests = config.get("tests")
+    if not tests:
+        raise SlipwaveError("the bench config lists no tests")
+    specs = []
+    for entry in tests:
+        merged = {**defaults, **entry}
+        camera = merged.pop("camera", None)
+        try:
+            specs.append(BenchTest(**merged, camera=Camera(**(camera or {}))))
+        except TypeError as err:
+            raise SlipwaveError(f"bench test {entry.get('test_id', '?')!r}: {err}") from err
+    ids = [spec.test_id for spec in specs]
+    if len(set(ids)) != len(ids):
+        raise SlipwaveError(f"bench test ids repeat: {ids}")
+    return specs
+
+
+def write_campaign(
+    specs: list[BenchTest], folder: str | PathLike[str], *, seed: int = 0, progress: bool = True
+) -> Path:
+    """Write every test of a campaign and its table ``tests.tsv``; returns the table.
+
+    Test k uses the seed ``seed + k``.
+    """
+    folder = Path(folder)
+    rows = []
+    for k, spec in enumerate(tqdm(specs, desc="virtual bench", unit="test", disable=not progress)):
+        paths = write_test(simulate_test(spec, seed=seed + k), folder)
+        video = paths.get("video")
+        rows.append({"test_id": spec.test_id, "csv": paths["csv"].name,
+                     "frames": video.name if video else "", "columns": ""})
+    table = folder / "tests.tsv"
+    with atomic_output(table) as temporary:
+        pd.DataFrame(rows).to_csv(temporary, sep="\t", index=False)
+    return table
