@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from slipwave.bench.camera import Camera, Photoelastic, write_video
+from slipwave.bench.camera import Camera, Photoelastic, write_image_sequence, write_video
 from slipwave.errors import SlipwaveError
 from slipwave.solver import Coulomb, LoadPath, Slab, simulate
 
@@ -106,3 +106,21 @@ def test_vp9_keeps_the_grey_levels(tmp_path):
 def test_camera_clock():
     camera = Camera(clock_offset=2.5, clock_rate_error=1e-3)
     np.testing.assert_allclose(camera.acquisition_time(np.array([0.0, 100.0])), [2.5, 102.6])
+
+
+@pytest.mark.parametrize("bits", [8, 16])
+def test_image_sequence_is_lossless_and_numbered(tmp_path, bits):
+    rng = np.random.default_rng(4)
+    top = 255 if bits == 8 else 65535
+    frames = [rng.integers(0, top, (40, 60)).astype(np.uint8 if bits == 8 else np.uint16)
+              for _ in range(3)]
+    folder = write_image_sequence(frames, [0.0, 0.04, 0.08], tmp_path / "seq")
+    names = sorted(p.name for p in folder.glob("*.png"))
+    assert names == ["frame_000000.png", "frame_000001.png", "frame_000002.png"]
+    for name, frame in zip(names, frames, strict=True):
+        with av.open(str(folder / name)) as container:
+            image = next(container.decode(video=0))
+            back = image.to_ndarray(format="gray16le" if bits == 16 else "gray")
+        np.testing.assert_array_equal(back, frame)
+    table = (folder / "frames.csv").read_text().splitlines()
+    assert table[0] == "file,camera_time_s" and table[2] == "frame_000001.png,0.040000"

@@ -140,3 +140,12 @@ def test_cli_bench(tmp_path, capsys):
     config.write_text("tests:\n  - test_id: one\n    colour: blue\n")
     assert main(["bench", str(config), "-o", str(tmp_path / "bad"), "--quiet"]) == 1
     assert "bench test 'one'" in capsys.readouterr().err
+
+
+def test_frames_as_image_sequence(tmp_path):
+    result = simulate_test(small(video="png", duration=14.0), seed=0)
+    paths = write_test(result, tmp_path)
+    images = sorted(paths["video"].glob("*.png"))
+    assert paths["video"].name == "small_frames" and len(images) == result.frame_times.size
+    with av.open(str(images[100])) as container:
+        assert next(container.decode(video=0)).width == 160

@@ -6,7 +6,8 @@ in-plane stresses of the slab at the pixel centres from the contact
 displacements of a solver step (the slab's field follows linearly from them)
 and renders frames as the camera records them: background, the flat under the
 slab, optical blur, sensor noise, quantisation, and a sync LED in a corner.
-:func:`write_video` stores frames with PyAV (lossless FFV1, or compact VP9).
+:func:`write_video` stores frames with PyAV (lossless FFV1, or compact VP9), and
+:func:`write_image_sequence` as numbered PNG images.
 """
 
 from __future__ import annotations
@@ -252,3 +253,36 @@ def write_video(
         finally:
             container.close()
     return target
+
+
+def write_image_sequence(
+    frames: Iterable[np.ndarray],
+    times: Iterable[float],
+    folder: str | PathLike[str],
+    *,
+    prefix: str = "frame",
+) -> Path:
+    """Write frames as numbered PNG images (8 or 16 bit) and their times in ``frames.csv``.
+
+    An image sequence has no timestamps of its own: ``frames.csv`` lists each
+    file with its camera time (s). Returns the folder.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    lines = ["file,camera_time_s"]
+    for index, (frame, time) in enumerate(zip(frames, times, strict=True)):
+        deep = frame.dtype == np.uint16
+        encoder = av.CodecContext.create("png", "w")
+        encoder.width, encoder.height = frame.shape[1], frame.shape[0]
+        encoder.pix_fmt = "gray16be" if deep else "gray"
+        image = av.VideoFrame.from_ndarray(frame, format="gray16le" if deep else "gray")
+        data = b"".join(bytes(packet) for packet in [*encoder.encode(image), *encoder.encode()])
+        name = f"{prefix}_{index:06d}.png"
+        with atomic_output(folder / name) as temporary:
+            temporary.write_bytes(data)
+        lines.append(f"{name},{time:.6f}")
+    if len(lines) == 1:
+        raise SlipwaveError(f"{folder}: no frames to write")
+    with atomic_output(folder / "frames.csv") as temporary:
+        temporary.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return folder

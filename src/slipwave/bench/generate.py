@@ -23,7 +23,7 @@ import pandas as pd
 import xarray as xr
 from tqdm import tqdm
 
-from slipwave.bench.camera import Camera, Photoelastic, write_video
+from slipwave.bench.camera import Camera, Photoelastic, write_image_sequence, write_video
 from slipwave.bench.signals import (
     DEFAULT_SENSORS,
     apply_sensors,
@@ -72,7 +72,7 @@ class BenchTest:
     min_event_drop: float = 0.5
     sync_time: float = 2.0
     flavour: Literal["canonical", "vendor"] = "canonical"
-    video: Literal["ffv1", "vp9", "none"] = "vp9"
+    video: Literal["ffv1", "vp9", "png", "none"] = "vp9"
     camera: Camera = field(default_factory=Camera)
 
     def slab(self) -> Slab:
@@ -255,8 +255,13 @@ def _render(result: BenchResult) -> Iterator[np.ndarray]:
         yield camera.render(field, rng, led=bool(led))
 
 
-def write_test(result: BenchResult, folder: str | PathLike[str]) -> dict[str, Path]:
+def write_test(
+    result: BenchResult, folder: str | PathLike[str], *, progress: bool = False
+) -> dict[str, Path]:
     """Write a test's CSV, video and truth (under ``truth/``) into ``folder``.
+
+    The video is ``<test_id>.mkv`` (``ffv1`` or ``vp9``) or, for ``png``, the
+    numbered images of ``<test_id>_frames/``.
 
     Returns
     -------
@@ -269,8 +274,13 @@ def write_test(result: BenchResult, folder: str | PathLike[str]) -> dict[str, Pa
     paths: dict[str, Path] = {}
     paths["csv"] = write_acquisition(result.recording, folder / f"{spec.test_id}.csv",
                                      flavour=spec.flavour, float_format="%.7g")
-    if spec.video != "none":
-        paths["video"] = write_video(result.frames(), result.frame_times,
+    frames = tqdm(result.frames(), total=result.frame_times.size, unit="frame",
+                  desc=spec.test_id, leave=False, disable=not progress)
+    if spec.video == "png":
+        paths["video"] = write_image_sequence(frames, result.frame_times,
+                                              folder / f"{spec.test_id}_frames")
+    elif spec.video != "none":
+        paths["video"] = write_video(frames, result.frame_times,
                                      folder / f"{spec.test_id}.mkv", codec=spec.video,
                                      fps=spec.camera.fps)
     truth = folder / "truth"
@@ -325,7 +335,7 @@ def write_campaign(
     folder = Path(folder)
     rows = []
     for k, spec in enumerate(tqdm(specs, desc="virtual bench", unit="test", disable=not progress)):
-        paths = write_test(simulate_test(spec, seed=seed + k), folder)
+        paths = write_test(simulate_test(spec, seed=seed + k), folder, progress=progress)
         video = paths.get("video")
         rows.append({"test_id": spec.test_id, "csv": paths["csv"].name,
                      "frames": video.name if video else "", "columns": ""})
