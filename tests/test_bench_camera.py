@@ -24,6 +24,12 @@ def camera() -> Photoelastic:
     return Photoelastic(SLAB, Camera(noise=0.0, blur=0.0))
 
 
+def random_frames(seed: int, bits: int, shape: tuple[int, int], count: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    dtype = np.uint8 if bits == 8 else np.uint16
+    return [rng.integers(0, np.iinfo(dtype).max, shape).astype(dtype) for _ in range(count)]
+
+
 def contact(simulation: xr.Dataset, k: int) -> np.ndarray:
     return np.concatenate([simulation["ux"].values[k], simulation["uy"].values[k]])
 
@@ -61,10 +67,7 @@ def test_shear_breaks_the_symmetry(simulation, camera):
 
 @pytest.mark.parametrize("bits", [8, 16])
 def test_ffv1_is_lossless_and_keeps_timestamps(tmp_path, bits):
-    rng = np.random.default_rng(1)
-    top = 255 if bits == 8 else 65535
-    frames = [rng.integers(0, top, (160, 320)).astype(np.uint8 if bits == 8 else np.uint16)
-              for _ in range(4)]
+    frames = random_frames(1, bits, (160, 320), 4)
     times = [0.0, 0.04, 0.081, 0.12]  # a late frame: variable frame rate
     path = write_video(frames, times, tmp_path / "v.mkv", codec="ffv1")
     with av.open(str(path)) as container:
@@ -110,10 +113,7 @@ def test_camera_clock():
 
 @pytest.mark.parametrize("bits", [8, 16])
 def test_image_sequence_is_lossless_and_numbered(tmp_path, bits):
-    rng = np.random.default_rng(4)
-    top = 255 if bits == 8 else 65535
-    frames = [rng.integers(0, top, (40, 60)).astype(np.uint8 if bits == 8 else np.uint16)
-              for _ in range(3)]
+    frames = random_frames(4, bits, (40, 60), 3)
     folder = write_image_sequence(frames, [0.0, 0.04, 0.08], tmp_path / "seq")
     names = sorted(p.name for p in folder.glob("*.png"))
     assert names == ["frame_000000.png", "frame_000001.png", "frame_000002.png"]

@@ -162,7 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.set_defaults(run=_bench)
 
     synth = commands.add_parser(
-        "synth", help="write the provisional saw-tooth campaign (three CSVs)",
+        "synth", help="write three saw-tooth CSVs from a signal model (fixtures, demos)",
         description="Write three saw-tooth test CSVs (simple signal model, not the virtual "
         "bench), one of them in the vendor flavour.",
     )
