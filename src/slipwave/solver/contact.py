@@ -81,7 +81,6 @@ class Increment:
     residual: float
     u_before: np.ndarray | None = None
     dx_before: float = 0.0
-    dy_before: float = 0.0
 
 
 class Body:
@@ -260,7 +259,7 @@ class Body:
                 raise NotConverged(f"active set still changing after {_MAX_ITERATIONS} iterations")
             if rounds == 0:
                 # The stuck state of the increment, before any wave: the peak.
-                before = (u.copy(), dx, dy)
+                before = (u.copy(), dx)
             if not cascade:
                 wave = state == SLIP
                 round_slipped[wave] = 0
@@ -278,10 +277,10 @@ class Body:
         limit = np.where(in_wave, dynamic, static)
         residual = self.residual(P, Q, gap, ds, limit, control, dx)
         direction = np.where(state == SLIP, np.sign(ds), 0).astype(np.int8)
-        u_before, dx_before, dy_before = before if cascade else (u, dx, dy)
+        u_before, dx_before = before if cascade else (u, dx)
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state, direction=direction,
                          round_slipped=round_slipped, iterations=iterations, residual=residual,
-                         sign=sign, u_before=u_before, dx_before=dx_before, dy_before=dy_before)
+                         sign=sign, u_before=u_before, dx_before=dx_before)
 
     def residual(
         self,
