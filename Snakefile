@@ -3,7 +3,7 @@
 #      snakemake --cores 2 --configfile my_campaign.yaml
 from snakemake.utils import min_version, validate
 
-from slipwave.campaign import column_arguments, read_campaign
+from slipwave.campaign import column_arguments, detection_arguments, read_campaign
 
 min_version("8.10")
 
@@ -16,6 +16,8 @@ tests = read_campaign(config["tests"])
 validate(tests, "workflow/schemas/tests.schema.json")
 for name in tests["columns"]:
     column_arguments(config, name)  # an unknown column-map name fails here, before any job
+for ratio in tests["gross_edge_ratio"]:
+    detection_arguments(config, ratio)  # so does a bad detection setting
 
 TEST_IDS = list(tests["test_id"])
 
@@ -25,11 +27,14 @@ wildcard_constraints:
 
 
 include: "workflow/rules/ingest.smk"
+include: "workflow/rules/detect.smk"
 include: "workflow/rules/report.smk"
 
 
 rule all:
     input:
         expand("results/{test_id}/recording.nc", test_id=TEST_IDS),
+        expand("results/{test_id}/events.csv", test_id=TEST_IDS),
         expand("reports/{test_id}.html", test_id=TEST_IDS),
+        "results/summary.csv",
     default_target: True

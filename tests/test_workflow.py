@@ -8,8 +8,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
+from slipwave.campaign import read_campaign
 from slipwave.io import read_dataset
 
 ROOT = Path(__file__).parents[1]
@@ -47,15 +49,24 @@ def test_dry_run_and_lint(workdir):
 def test_full_run_on_default_campaign(workdir):
     run = snakemake(workdir, "--cores", "2")
     assert run.returncode == 0, run.stderr
-    ids = [line.split("\t")[0] for line in
-           (workdir / "config/tests.tsv").read_text().splitlines()[1:]]
-    assert len(ids) == 3
+    ids = list(read_campaign(workdir / "config/tests.tsv")["test_id"])
+    assert ids == ["hl050", "hl025", "hl075"]
+    summary = pd.read_csv(workdir / "results/summary.csv").set_index("test_id")
+    assert list(summary.index) == ids
     for test_id in ids:
         recording = read_dataset(workdir / f"results/{test_id}/recording.nc")
         assert recording.attrs["test_id"] == test_id
+        events = pd.read_csv(workdir / f"results/{test_id}/events.csv")
+        truth = pd.read_csv(workdir / f"raw_data/bench/truth/{test_id}_events.csv")
+        visible = truth[truth["visible"]]
+        # the default campaign's detection is exact (hl075 with its own gross_edge_ratio)
+        assert events["kind"].value_counts().to_dict() == visible["kind"].value_counts().to_dict()
+        assert summary.loc[test_id, "gross_slip_waves"] == (visible["kind"] == "gross_slip").sum()
         page = (workdir / f"reports/{test_id}.html").read_text()
         assert f"Test {test_id}" in page
-        assert (workdir / f"results/logs/ingest/{test_id}.log").exists()
+        assert "<h2>Events</h2>" in page
+        for rule in ("ingest", "detect", "test_page"):
+            assert (workdir / f"results/logs/{rule}/{test_id}.log").exists()
 
 
 def test_column_map_from_config(workdir):
@@ -81,8 +92,13 @@ def test_column_map_from_config(workdir):
         ("tests: t.tsv\n", "test_id\tcsv\tframes\tcolumns\na\tx.csv\t\tnope\n",
          "column map 'nope' is not in the config's column_maps"),
         ("tests: missing.tsv\n", None, "missing.tsv: campaign table not found"),
+        ("tests: t.tsv\ndetection:\n  thresold: 5\n", None,
+         "Additional properties are not allowed ('thresold' was unexpected)"),
+        ("tests: t.tsv\n", "test_id\tcsv\tgross_edge_ratio\na\tx.csv\tlots\n",
+         "'lots' does not match"),
     ],
-    ids=["bad-channel", "unknown-key", "bad-test-id", "unknown-map", "no-table"],
+    ids=["bad-channel", "unknown-key", "bad-test-id", "unknown-map", "no-table",
+         "unknown-detection-key", "bad-edge-ratio"],
 )
 def test_wrong_config_fails_before_any_job(workdir, config, table, message):
     (workdir / "bad.yaml").write_text(config)

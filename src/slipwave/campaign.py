@@ -12,13 +12,14 @@ import pandas as pd
 
 from slipwave.errors import ConfigError
 
-TABLE_COLUMNS = ("test_id", "csv", "frames", "columns")
+TABLE_COLUMNS = ("test_id", "csv", "frames", "columns", "gross_edge_ratio")
 
 
 def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
     """Read a campaign table (tab separated, one row per test), indexed by ``test_id``.
 
-    Empty optional cells (``frames``, ``columns``) become empty strings.
+    Empty optional cells (``frames``, ``columns``, ``gross_edge_ratio``)
+    become empty strings.
 
     Raises
     ------
@@ -41,7 +42,7 @@ def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
                 f"{path}, line 1: no {required!r} column; the header names "
                 f"{', '.join(map(repr, table.columns))}"
             )
-    for optional in ("frames", "columns"):
+    for optional in ("frames", "columns", "gross_edge_ratio"):
         if optional not in table.columns:
             table[optional] = ""
     table = table.apply(lambda column: column.str.strip())
@@ -71,3 +72,37 @@ def column_arguments(config: Mapping[str, Any], name: str) -> str:
         shlex.quote(f"--column={header}={channel}")
         for header, channel in column_map(config, name).items()
     )
+
+
+DETECTION_OPTIONS = {
+    "threshold": "--threshold",
+    "max_spike": "--max-spike",
+    "max_duration": "--max-duration",
+    "min_asymmetry": "--min-asymmetry",
+    "gross_edge_ratio": "--gross-edge-ratio",
+}
+"""Keys of the config's ``detection`` section and the ``slipwave detect`` options they set."""
+
+
+def detection_arguments(config: Mapping[str, Any], gross_edge_ratio: str = "") -> str:
+    """``slipwave detect`` options from the config's ``detection`` section.
+
+    A test's own ``gross_edge_ratio`` cell (campaign table), when not empty,
+    overrides the config's.
+
+    Examples
+    --------
+    >>> detection_arguments({"detection": {"threshold": 10, "gross_edge_ratio": 0.9}}, "1.3")
+    '--threshold=10 --gross-edge-ratio=1.3'
+    """
+    settings = dict(config.get("detection") or {})
+    if gross_edge_ratio:
+        try:
+            settings["gross_edge_ratio"] = float(gross_edge_ratio)
+        except ValueError as err:
+            raise ConfigError(f"gross_edge_ratio {gross_edge_ratio!r} is not a number") from err
+    unknown = set(settings) - set(DETECTION_OPTIONS)
+    if unknown:
+        raise ConfigError(f"unknown detection settings: {', '.join(sorted(unknown))}")
+    return " ".join(shlex.quote(f"{DETECTION_OPTIONS[key]}={value}")
+                    for key, value in settings.items() if value is not None)

@@ -33,8 +33,48 @@ def _report(args: argparse.Namespace) -> None:
     from slipwave.io import read_dataset
     from slipwave.report import write_test_page
 
-    write_test_page(read_dataset(args.recording), args.output)
+    events = None if args.events is None else read_dataset(args.events)
+    write_test_page(read_dataset(args.recording), args.output, events)
     print(f"{args.recording} -> {args.output}")
+
+
+def _detect(args: argparse.Namespace) -> None:
+    from slipwave.events import detect_events, events_dataset, segment_phases, wave_counts
+    from slipwave.io import atomic_output, read_dataset, write_dataset
+
+    recording = read_dataset(args.recording)
+    events = detect_events(
+        recording, min_drop=args.min_drop, min_jump=args.min_jump, threshold=args.threshold,
+        max_spike=args.max_spike, max_duration=args.max_duration,
+        min_asymmetry=args.min_asymmetry, gross_edge_ratio=args.gross_edge_ratio,
+    )
+    dataset = events_dataset(events, segment_phases(recording, events))
+    dataset.attrs["test_id"] = args.test_id or str(recording.attrs.get("test_id", ""))
+    dataset.attrs["source"] = str(args.recording)
+    if args.netcdf is not None:
+        write_dataset(dataset, args.netcdf)
+    with atomic_output(args.output) as temporary:
+        events.to_csv(temporary, index=False, float_format="%.6g")
+    for warning in events.attrs["warnings"]:
+        print(f"warning: {args.recording}: {warning}", file=sys.stderr)
+    counts = ", ".join(f"{n} {kind}" for kind, n in wave_counts(events).items())
+    print(f"{args.recording} -> {args.output}: {len(events)} events ({counts})")
+
+
+def _summarize(args: argparse.Namespace) -> None:
+    import pandas as pd
+
+    from slipwave.events import summary_row
+    from slipwave.io import atomic_output, read_dataset
+
+    rows = []
+    for path in args.events:
+        dataset = read_dataset(path)
+        test_id = str(dataset.attrs.get("test_id") or Path(path).parent.name)
+        rows.append(summary_row(test_id, dataset))
+    with atomic_output(args.output) as temporary:
+        pd.DataFrame(rows).to_csv(temporary, index=False, float_format="%.6g")
+    print(f"{len(rows)} tests -> {args.output}")
 
 
 def _synth(args: argparse.Namespace) -> None:
@@ -119,6 +159,8 @@ def build_parser() -> argparse.ArgumentParser:
     report = commands.add_parser("report", help="write the HTML page of one test")
     report.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
     report.add_argument("-o", "--output", type=Path, required=True, help="HTML page to write")
+    report.add_argument("--events", type=Path, default=None,
+                        help="events netCDF from 'slipwave detect --netcdf' (phases, slips)")
     report.set_defaults(run=_report)
 
     sim = commands.add_parser(
@@ -160,6 +202,41 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--seed", type=int, default=0, help="noise seed of the first test (0)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
     bench.set_defaults(run=_bench)
+
+    detect = commands.add_parser(
+        "detect", help="detect partial and gross slips in a recording",
+        description="Find the T drops of a recording, classify them by the DG/DD jumps and "
+        "write the events (CSV, and netCDF with the phase of every sample and the T/|N| "
+        "ratios at gross slips).",
+    )
+    detect.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
+    detect.add_argument("-o", "--output", type=Path, required=True, help="events CSV to write")
+    detect.add_argument("--netcdf", type=Path, default=None,
+                        help="also write events, phases and ratios as netCDF")
+    detect.add_argument("--test-id", default=None, help="test id (default: the recording's)")
+    detect.add_argument("--min-drop", type=float, default=None,
+                        help="smallest T drop, N (default: --threshold x T noise)")
+    detect.add_argument("--min-jump", type=float, default=None,
+                        help="smallest DG/DD jump, mm (default: --threshold x noise)")
+    detect.add_argument("--threshold", type=float, default=8.0,
+                        help="default thresholds in noise standard deviations (8)")
+    detect.add_argument("--max-spike", type=int, default=2,
+                        help="longest spike ignored, samples (2)")
+    detect.add_argument("--max-duration", type=float, default=None,
+                        help="longest drop looked for, s (a tenth of the recording)")
+    detect.add_argument("--min-asymmetry", type=float, default=3.0,
+                        help="how much faster than the rise before it a drop must be (3)")
+    detect.add_argument("--gross-edge-ratio", type=float, default=0.9,
+                        help="DG jump / DD jump from which a drop is a gross slip (0.9)")
+    detect.set_defaults(run=_detect)
+
+    summarize = commands.add_parser(
+        "summarize", help="one row per test: T/|N| at gross slips, wave counts, phases",
+    )
+    summarize.add_argument("events", type=Path, nargs="+",
+                           help="events netCDF files from 'slipwave detect --netcdf'")
+    summarize.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
+    summarize.set_defaults(run=_summarize)
 
     synth = commands.add_parser(
         "synth", help="write three saw-tooth CSVs from a signal model (fixtures, demos)",

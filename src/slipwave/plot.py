@@ -19,11 +19,30 @@ from matplotlib.patches import Patch
 from slipwave.io import CHANNELS
 from slipwave.signals import load_ratio
 
+PHASE_COLOURS = {"normal_loading": "#bbbbbb", "partial_slip": "#8fbc8f",
+                 "gross_slip": "#e07b6a"}
+KIND_MARKERS = {"gross_slip": ("v", "#b22222"), "partial_slip": ("v", "#2e8b57"),
+                "unclassified": ("v", "#555555")}
 
-def plot_recording(recording: xr.Dataset) -> Figure:
+
+def _phase_runs(phase: xr.DataArray) -> list[tuple[str, float, float]]:
+    """(label, start, end) of each run of equal labels, stick left out."""
+    labels = phase.values.astype(str)
+    time = phase["time"].values
+    change = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+    starts = np.concatenate([[0], change])
+    ends = np.concatenate([change, [labels.size]]) - 1
+    return [(labels[a], float(time[a]), float(time[b])) for a, b in zip(starts, ends,
+                                                                         strict=True)
+            if labels[a] != "stick"]
+
+
+def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> Figure:
     """The recorded channels and T/|N| against time, one panel each, time shared.
 
-    Missing channels are left out. Axis labels carry the units.
+    Missing channels are left out. Axis labels carry the units. With
+    ``events`` (from :func:`slipwave.events.events_dataset`) the phases are
+    shaded on every panel and each slip's onset is marked on T.
     """
     panels = [c for c in CHANNELS if c in recording.data_vars]
     with sns.axes_style("whitegrid"):
@@ -43,6 +62,24 @@ def plot_recording(recording: xr.Dataset) -> Figure:
     axes[-1].set_ylabel("T/|N| [-]")
     axes[-1].set_title(ratio.attrs["long_name"], fontsize=9, loc="left")
     axes[-1].set_xlabel("time [s]")
+    if events is not None:
+        runs = _phase_runs(events["phase"])
+        for ax in axes:
+            for label, start, end in runs:
+                ax.axvspan(start, end, color=PHASE_COLOURS[label], alpha=0.35, lw=0)
+        if "T" in panels:
+            kinds = events["kind"].values.astype(str)
+            for kind, (marker, colour) in KIND_MARKERS.items():
+                chosen = kinds == kind
+                if chosen.any():
+                    axes[panels.index("T")].plot(
+                        events["t_start"].values[chosen], events["T_before"].values[chosen],
+                        marker, color=colour, ms=4, label=kind.replace("_", " "))
+            handles = [Patch(color=PHASE_COLOURS[k], alpha=0.35, label=k.replace("_", " "))
+                       for k in PHASE_COLOURS]
+            axes[panels.index("T")].legend(
+                handles=axes[panels.index("T")].get_legend_handles_labels()[0] + handles,
+                fontsize=7, loc="upper left", ncol=2)
     fig.suptitle(str(recording.attrs.get("test_id", recording.attrs.get("source", ""))))
     return fig
 

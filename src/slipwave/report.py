@@ -45,13 +45,34 @@ def channel_summary(recording: xr.Dataset) -> list[dict[str, Any]]:
     return rows
 
 
-def render_test_page(recording: xr.Dataset) -> str:
+def event_summary(events: xr.Dataset) -> dict[str, Any]:
+    """Counts, friction ratios, warnings and the table of events, for the page."""
+    from slipwave.events import EVENT_COLUMNS, wave_counts
+
+    table = events[list(EVENT_COLUMNS)].to_dataframe()
+    ratios = {
+        name: {key: float(events[f"{name}_{key}"]) for key in ("mean", "std", "ci_low",
+                                                                "ci_high")}
+        for name in ("static", "dynamic")
+    }
+    return {
+        "counts": wave_counts(table),
+        "ratios": ratios,
+        "warnings": [w for w in str(events.attrs.get("warnings", "")).splitlines() if w],
+        "columns": list(EVENT_COLUMNS),
+        "rows": table.to_dict("records"),
+    }
+
+
+def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None) -> str:
     """The HTML page of one test: metadata, warnings, channels and their plot.
 
-    The page is self-contained (the figure is embedded), so it can be mailed
-    or archived on its own.
+    With ``events`` (:func:`slipwave.events.events_dataset`) the plot shades
+    the phases and marks the slips, and the page lists the events, the wave
+    counts and T/|N| at gross slips. The page is self-contained (the figure is
+    embedded), so it can be mailed or archived on its own.
     """
-    png = figure_png(plot_recording(recording))
+    png = figure_png(plot_recording(recording, events))
     attrs = recording.attrs
     time = recording["time"].values
     metadata = {
@@ -69,12 +90,15 @@ def render_test_page(recording: xr.Dataset) -> str:
         samples=int(time.size),
         duration=float(time[-1] - time[0]) if time.size else 0.0,
         figure=base64.b64encode(png).decode("ascii"),
+        events=None if events is None else event_summary(events),
         version=__version__,
     )
 
 
-def write_test_page(recording: xr.Dataset, path: str | PathLike[str]) -> Path:
+def write_test_page(
+    recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None
+) -> Path:
     """Write :func:`render_test_page` to ``path``, whole or not at all."""
     with atomic_output(path) as temporary:
-        temporary.write_text(render_test_page(recording), encoding="utf-8")
+        temporary.write_text(render_test_page(recording, events), encoding="utf-8")
     return Path(path)

@@ -1,7 +1,8 @@
 rule test_page:
-    """The HTML page of one test: channels and T/|N| against time."""
+    """The HTML page of one test: channels and T/|N| against time, phases and slips."""
     input:
-        "results/{test_id}/recording.nc",
+        recording="results/{test_id}/recording.nc",
+        events="results/{test_id}/events.nc",
     output:
         report(
             "reports/{test_id}.html",
@@ -14,4 +15,5 @@ rule test_page:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave report {input:q} -o {output:q} > {log:q} 2>&1"
+        "slipwave report {input.recording:q} --events {input.events:q} -o {output:q} "
+        "> {log:q} 2>&1"

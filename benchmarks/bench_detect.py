@@ -1,0 +1,51 @@
+"""Event detection speed: ``detect_events`` on a 10^7-sample, five-channel recording.
+
+The recording is the virtual bench's hl050 test (H/L = 0.5, 280 s) sampled at
+35.7 kHz (10^7 samples of T, N, DG, DD, DT with the default sensors' noise,
+spikes and drift), as a fast acquisition card would record it.
+Target: >= 10 million samples per second on one core.
+Run: make bench  (or python benchmarks/bench_detect.py)
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import time
+
+import numpy as np
+
+from slipwave.bench.generate import BenchTest, simulate_test
+from slipwave.bench.signals import DEFAULT_SENSORS, apply_sensors, clean_signals
+from slipwave.events import detect_events
+
+SAMPLES = 10_000_000
+TARGET = 10e6  # samples per second
+
+
+def main() -> None:
+    spec = BenchTest("hl050", video="none")
+    simulation = simulate_test(spec, seed=0).simulation
+    clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
+                          duration=spec.duration, sample_rate=SAMPLES / spec.duration,
+                          wave_speed=spec.wave_speed)
+    recording = apply_sensors(clean, DEFAULT_SENSORS, seed=0)
+    timings = []
+    for _ in range(3):
+        start = time.perf_counter()
+        events = detect_events(recording)
+        timings.append(time.perf_counter() - start)
+    best, median = min(timings), float(np.median(timings))
+    rate = recording.sizes["time"] / median
+    status = "meets" if rate >= TARGET else "MISSES"
+    counts = events["kind"].value_counts().to_dict()
+    print(f"detect_events: {recording.sizes['time']:,} samples x 5 channels, {len(events)} "
+          f"events {counts}: median {median:.2f} s (best {best:.2f} s) = "
+          f"{rate / 1e6:.1f} M samples/s ({status} the {TARGET / 1e6:.0f} M samples/s target)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,261 @@
+"""Slip events of a friction test: T drops classified by what the edges did.
+
+A gross slip is a wave that crossed the whole contact: the T drop comes with
+a jump of DG, the far (left) edge, at least as large as the jump of DD, the
+right edge where waves start. A partial slip is a T drop whose DG jump is
+missing, smaller than DD's, or of the other sign: the left part of the
+contact held.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from slipwave.errors import SlipwaveError
+from slipwave.events.steps import _level, edge_jumps, load_drops
+
+EVENT_COLUMNS = (
+    "kind", "i_start", "t_start", "i_end", "t_end", "duration", "T_before", "T_after",
+    "N_before", "N_after", "ratio_before", "ratio_after", "drop", "DG_jump", "DD_jump",
+    "edge_ratio", "direction",
+)
+"""Columns of :func:`detect_events`, in order."""
+
+EVENT_UNITS = {
+    "i_start": "1", "t_start": "s", "i_end": "1", "t_end": "s", "duration": "s",
+    "T_before": "N", "T_after": "N", "N_before": "N", "N_after": "N", "ratio_before": "1",
+    "ratio_after": "1", "drop": "N", "DG_jump": "mm", "DD_jump": "mm", "edge_ratio": "1",
+}
+
+EVENT_DESCRIPTIONS = {
+    "kind": "partial_slip, gross_slip, or unclassified (no DG/DD channel)",
+    "i_start": "sample index of the onset (last sample before the T drop)",
+    "t_start": "time of the onset",
+    "i_end": "sample index where the T drop ends",
+    "t_end": "time where the T drop ends",
+    "duration": "t_end - t_start",
+    "T_before": "tangential load at the onset (fitted, the peak)",
+    "T_after": "tangential load at the end (fitted, the trough)",
+    "N_before": "compressive normal load |N| just before the onset",
+    "N_after": "compressive normal load |N| just after the end",
+    "ratio_before": "T/|N| at the onset: the static estimate",
+    "ratio_after": "T/|N| at the end: the dynamic estimate",
+    "drop": "T_before - T_after",
+    "DG_jump": "change of DG across the event (left edge)",
+    "DD_jump": "change of DD across the event (right edge)",
+    "edge_ratio": "DG_jump / DD_jump (gross slips: at least gross_edge_ratio)",
+    "direction": "right_to_left or left_to_right (which edge moved first), or unresolved",
+}
+
+
+def classify_events(
+    drops: pd.DataFrame,
+    jumps: Mapping[str, pd.DataFrame],
+    *,
+    gross_edge_ratio: float = 0.9,
+    tolerance: float | None = None,
+    resolution: float | None = None,
+) -> pd.DataFrame:
+    """Partial or gross slip for each T drop, from the edge jumps around it.
+
+    Parameters
+    ----------
+    drops
+        T drops (:func:`~slipwave.events.load_drops`).
+    jumps
+        ``{"DG": ..., "DD": ...}``: edge jumps (:func:`~slipwave.events.edge_jumps`)
+        of the left and right edges, found anywhere or measured at the drops
+        (rows whose ``significant`` is false are no jump); a missing key
+        means the channel is missing.
+    gross_edge_ratio
+        A drop is a gross slip when the left edge jumped, in the same direction
+        as the right edge (or alone), by at least this times the right edge's
+        jump. About 1 for a low slab (0.9 leaves room for noise); a tall
+        slab's gross slips move the left edge more (the events table's
+        ``edge_ratio`` column shows the two groups of a test).
+    tolerance
+        A jump belongs to a drop when it starts within this time (s) of the
+        drop's interval; ``None``: the drop's own duration.
+    resolution
+        Smallest difference of onset times (s) that tells which edge moved
+        first; ``None``: a quarter of the drop's duration, at least two sample
+        intervals (onsets of small jumps are uncertain by a few samples).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``drops`` with ``kind``, ``DG_jump``, ``DD_jump`` (the matched jumps,
+        0 when the edge did not jump), ``edge_ratio`` and ``direction``.
+
+    Examples
+    --------
+    >>> drops = pd.DataFrame({"t_start": [10.0, 20.0], "t_end": [10.3, 20.3]})
+    >>> dg = pd.DataFrame({"t_start": [10.0], "t_end": [10.3], "jump": [-0.2]})
+    >>> dd = pd.DataFrame({"t_start": [10.0, 20.0], "t_end": [10.3, 20.3],
+    ...                    "jump": [-0.14, -0.06]})
+    >>> classify_events(drops, {"DG": dg, "DD": dd})["kind"].tolist()
+    ['gross_slip', 'partial_slip']
+    """
+    table = drops.copy()
+    interval = drops.attrs.get("sample_interval", 0.0)
+    starts = drops["t_start"].to_numpy(dtype=float)
+    ends = drops["t_end"].to_numpy(dtype=float)
+    if resolution is None:
+        resolution_at = np.maximum(0.25 * (ends - starts), 2.0 * interval)
+    else:
+        resolution_at = np.full(starts.size, float(resolution))
+    slack = ends - starts if tolerance is None else np.full(starts.size, float(tolerance))
+    moved: dict[str, np.ndarray] = {}
+    onsets: dict[str, np.ndarray] = {}
+    for channel in ("DG", "DD"):
+        moved[channel] = np.zeros(starts.size)
+        onsets[channel] = np.full(starts.size, np.nan)
+        found = jumps.get(channel)
+        if found is None or found.empty:
+            continue
+        if "significant" in found:
+            found = found[found["significant"]]
+        jump_starts = found["t_start"].to_numpy(dtype=float)
+        size = found["jump"].to_numpy(dtype=float)
+        for k in range(starts.size):
+            near = (jump_starts >= starts[k] - slack[k]) & (jump_starts <= ends[k] + slack[k])
+            if near.any():  # the largest: a small precursor (creep) is not the slip
+                best = np.flatnonzero(near)[np.argmax(np.abs(size[near]))]
+                moved[channel][k] = size[best]
+                onsets[channel][k] = jump_starts[best]
+    left, right = moved["DG"], moved["DD"]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(right != 0, left / right, np.where(left != 0, np.inf, np.nan))
+    gross = (left != 0) & ((right == 0) | (ratio >= gross_edge_ratio))
+    if "DG" in jumps:
+        kind = np.where(gross, "gross_slip", "partial_slip")
+    else:
+        kind = np.full(starts.size, "unclassified")
+    lag = onsets["DG"] - onsets["DD"]
+    direction = np.where(lag >= resolution_at, "right_to_left",
+                         np.where(lag <= -resolution_at, "left_to_right", "unresolved"))
+    table["kind"] = kind
+    table["DG_jump"] = left
+    table["DD_jump"] = right
+    table["edge_ratio"] = ratio
+    table["direction"] = direction
+    return table
+
+
+def _usable(recording: xr.Dataset, channel: str) -> bool:
+    return channel in recording and bool(np.isfinite(recording[channel].values).any())
+
+
+def detect_events(
+    recording: xr.Dataset,
+    *,
+    min_drop: float | None = None,
+    min_jump: float | None = None,
+    threshold: float = 8.0,
+    max_spike: int = 2,
+    max_duration: float | None = None,
+    min_asymmetry: float = 3.0,
+    gross_edge_ratio: float = 0.9,
+) -> pd.DataFrame:
+    """Slip events of a recording: T drops, classified, with loads and edge jumps.
+
+    Parameters
+    ----------
+    recording
+        A Dataset from :func:`slipwave.io.read_acquisition` (T and N at
+        least; DG and DD to tell partial from gross slips).
+    min_drop, min_jump
+        Smallest T drop (N) and edge jump (mm); ``None``: ``threshold`` times
+        each channel's noise level.
+    threshold, max_spike, max_duration, min_asymmetry
+        As in :func:`~slipwave.events.load_drops`.
+    gross_edge_ratio
+        As in :func:`classify_events`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per event with the columns of :data:`EVENT_COLUMNS` (see
+        :data:`EVENT_DESCRIPTIONS`). ``DG_jump`` and ``DD_jump`` are measured
+        across every event (:func:`~slipwave.events.edge_jumps` with ``at``),
+        significant or not. ``attrs`` holds
+        ``warnings`` (a list of str), the noise levels and thresholds.
+
+    Raises
+    ------
+    SlipwaveError
+        If T or N is missing or has no finite value.
+
+    Examples
+    --------
+    >>> from slipwave.synthetic import SawtoothBench, sawtooth_recording
+    >>> events = detect_events(sawtooth_recording(SawtoothBench(), seed=0))
+    >>> events["kind"].value_counts().to_dict()
+    {'gross_slip': 12, 'partial_slip': 8}
+    """
+    source = recording.attrs.get("source", "the recording")
+    for channel in ("T", "N"):
+        if not _usable(recording, channel):
+            raise SlipwaveError(f"{source}: channel {channel} is missing or has no finite value")
+    time = np.asarray(recording["time"].values, dtype=float)
+    load = np.asarray(recording["T"].values, dtype=float)
+    drops = load_drops(time, load, min_drop=min_drop, threshold=threshold,
+                       max_spike=max_spike, max_duration=max_duration,
+                       min_asymmetry=min_asymmetry)
+    warnings: list[str] = []
+    jumps: dict[str, pd.DataFrame] = {}
+    for channel in ("DG", "DD"):
+        if _usable(recording, channel):
+            jumps[channel] = edge_jumps(time, np.asarray(recording[channel].values, dtype=float),
+                                        at=drops, min_jump=min_jump, threshold=threshold,
+                                        max_spike=max_spike)
+    if "DG" not in jumps:
+        warnings.append("no usable DG channel: events are T drops, not classified "
+                        "into partial and gross slips")
+    elif "DD" not in jumps:
+        warnings.append("no usable DD channel: a DG jump alone makes a gross slip")
+    events = classify_events(drops, jumps, gross_edge_ratio=gross_edge_ratio)
+    normal = np.abs(np.asarray(recording["N"].values, dtype=float))
+    starts = events["i_start"].to_numpy(dtype=np.int64)
+    ends = events["i_end"].to_numpy(dtype=np.int64)
+    # levels over windows as long as the event (at least 5 samples), clear of it
+    width = np.maximum(ends - starts, 5)
+    n_before = np.array([_level(normal, s - w, s + 1) for s, w in zip(starts, width, strict=True)])
+    n_after = np.array([_level(normal, e, e + w) for e, w in zip(ends, width, strict=True)])
+    result = pd.DataFrame({
+        "kind": events["kind"],
+        "i_start": starts,
+        "t_start": events["t_start"],
+        "i_end": ends,
+        "t_end": events["t_end"],
+        "duration": events["duration"],
+        "T_before": events["peak"],
+        "T_after": events["trough"],
+        "N_before": n_before,
+        "N_after": n_after,
+        "ratio_before": events["peak"] / n_before,
+        "ratio_after": events["trough"] / n_after,
+        "drop": events["drop"],
+        "DG_jump": np.nan,
+        "DD_jump": np.nan,
+        "edge_ratio": np.nan,
+        "direction": events["direction"],
+    }, columns=list(EVENT_COLUMNS))
+    for channel, found in jumps.items():
+        result[f"{channel}_jump"] = found["jump"].to_numpy()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        result["edge_ratio"] = result["DG_jump"] / result["DD_jump"]
+    result = result.astype({"i_start": np.int64, "i_end": np.int64})
+    result.attrs.update(
+        warnings=warnings,
+        T_noise=drops.attrs.get("noise", np.nan),
+        min_drop=drops.attrs.get("min_size", np.nan),
+        sample_interval=drops.attrs.get("sample_interval", np.nan),
+        **{f"{c}_noise": j.attrs.get("noise", np.nan) for c, j in jumps.items()},
+        **{f"{c}_min_jump": j.attrs.get("min_size", np.nan) for c, j in jumps.items()},
+    )
+    return result

@@ -1,0 +1,564 @@
+"""Fast changes of one signal: load drops and displacement jumps.
+
+Detection runs in three composable stages, in the manner of a seismic
+trigger:
+
+1. a characteristic signal: :func:`despike` (block medians that remove
+   spikes) and :func:`noise_level` (the robust white-noise level that sets the
+   default thresholds);
+2. thresholds: :func:`fall_candidates` marks where the signal falls by more
+   than a threshold within a short window, on a pyramid of time scales, and
+   keeps the falls that are much faster than the rise before them (a
+   saw-tooth, not an oscillation);
+3. events: :func:`refine_step` places each fall's onset and end on the
+   full-rate samples with two-segment (hinge) fits, and :func:`load_drops` /
+   :func:`edge_jumps` return them as a table.
+
+Everything is vectorised over samples; the only Python loops run over
+candidate events and pyramid levels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from slipwave.errors import SlipwaveError
+
+STEP_COLUMNS = ("i_start", "t_start", "i_end", "t_end", "peak", "trough", "drop", "duration")
+"""Columns of :func:`load_drops`; :func:`edge_jumps` adds ``before``, ``after`` and ``jump``."""
+
+_MAD_TO_SIGMA = 1.4826  # median absolute deviation of a Gaussian -> its standard deviation
+_NOISE_SAMPLE = 200_000  # differences used for the noise estimate (strided subsample)
+_LAG = 4  # blocks over which a pyramid level measures a fall
+
+
+def noise_level(values: np.ndarray) -> float:
+    """Standard deviation of the white noise on a signal, robustly.
+
+    From the median absolute deviation of first differences (divided by
+    sqrt 2): ramps, steps and rare spikes do not move it. A quantised signal
+    whose differences are mostly zero falls back on the standard deviation of
+    the differences inside their central 90 %.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> ramp = np.linspace(0, 50, 100_000) + rng.normal(0, 0.04, 100_000)
+    >>> round(noise_level(ramp), 3)
+    0.04
+    """
+    values = np.asarray(values, dtype=float)
+    if values.size < 3:
+        return 0.0
+    step = max(1, (values.size - 1) // _NOISE_SAMPLE)
+    first = np.arange(0, values.size - 1, step)
+    differences = values[first + 1] - values[first]
+    differences = differences[np.isfinite(differences)]
+    if differences.size < 2:
+        return 0.0
+    centred = differences - np.median(differences)
+    sigma = _MAD_TO_SIGMA * float(np.median(np.abs(centred))) / np.sqrt(2.0)
+    if sigma == 0.0:
+        low, high = np.quantile(centred, [0.05, 0.95])
+        core = centred[(centred >= low) & (centred <= high)]
+        sigma = float(core.std()) / np.sqrt(2.0) if core.size else 0.0
+    return float(sigma)
+
+
+def despike(values: np.ndarray, max_spike: int = 2) -> np.ndarray:
+    """Medians of consecutive blocks of ``2 * max_spike + 1`` samples.
+
+    A spike of up to ``max_spike`` samples that comes back to the level it
+    left cannot hold the majority of a block, so it is gone from the result,
+    whatever its height. The result is ``values.size // block`` long (the
+    last incomplete block is dropped).
+
+    Examples
+    --------
+    >>> despike(np.array([1.0, 1.0, 9.0, 1.0, 1.0, 2.0, 2.0, 2.0, -7.0, 2.0]))
+    array([1., 2.])
+    """
+    block = 2 * max_spike + 1
+    count = values.size // block
+    blocks = values[: count * block].reshape(count, block)
+    return np.partition(blocks, max_spike, axis=1)[:, max_spike]
+
+
+def _fill_gaps(values: np.ndarray) -> np.ndarray:
+    """Linear interpolation across NaNs (the detection needs a complete signal)."""
+    finite = np.isfinite(values)
+    if finite.all():
+        return values
+    index = np.arange(values.size)
+    return np.interp(index, index[finite], values[finite])
+
+
+def fall_candidates(
+    smooth: np.ndarray,
+    threshold: float,
+    *,
+    block: int,
+    max_duration: int,
+    min_asymmetry: float = 3.0,
+) -> np.ndarray:
+    """Coarse falls of a despiked signal: (peak sample, trough sample) pairs.
+
+    Parameters
+    ----------
+    smooth
+        The signal from :func:`despike`, one value per block of ``block``
+        samples.
+    threshold
+        A fall is kept when the signal decreases by more than this within
+        ``_LAG`` blocks of one pyramid level (levels average pairs of blocks,
+        so each sees falls about twice as long as the one below).
+    block
+        Samples per value of ``smooth``, to express the result in samples.
+    max_duration
+        The longest fall looked for, in samples: it sets the pyramid's depth.
+    min_asymmetry
+        A fall is kept only if it is at least this many times faster than the
+        rise before it (from the previous swing low, a low the signal had
+        risen from by more than ``threshold``): saw-tooth drops pass, the
+        descending half of an oscillation does not.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (k, 2): the sample indices of the top and bottom of each fall,
+        sorted, not overlapping.
+    """
+    levels: list[tuple[int, int]] = []
+    level = smooth
+    scale = 1
+    while level.size > _LAG:
+        fall = level[:-_LAG] - level[_LAG:]
+        marked = np.flatnonzero(fall > threshold)
+        if marked.size:
+            # runs of consecutive marked positions, one per fall
+            breaks = np.flatnonzero(np.diff(marked) > _LAG)
+            firsts = marked[np.concatenate([[0], breaks + 1])]
+            lasts = marked[np.concatenate([breaks, [marked.size - 1]])]
+            for first, last in zip(firsts, lasts, strict=True):
+                top = first + int(np.argmax(level[first : last + 1]))
+                bottom = top + int(np.argmin(level[top : last + _LAG + 1]))
+                levels.append((top * scale, max(bottom, top + 1) * scale))
+        if _LAG * scale * 2 * block > max_duration or level.size < 2 * (_LAG + 1):
+            break
+        even = level.size // 2 * 2
+        level = 0.5 * (level[0:even:2] + level[1:even:2])
+        scale *= 2
+    # finest first; a coarser fall replaces finer pieces of itself (it falls further
+    # without rebounding on the way) and is dropped where it spans several falls
+    kept: list[tuple[int, int]] = []
+    for top, bottom in levels:
+        inside = [(a, b) for a, b in kept if top <= b and a <= bottom]
+        if inside:
+            segment = smooth[top : bottom + 1]
+            rebound = float(np.max(segment - np.minimum.accumulate(segment)))
+            further = smooth[top] - smooth[bottom] - max(smooth[a] - smooth[b] for a, b in inside)
+            if rebound > threshold or further <= threshold:
+                continue
+        if _asymmetry(smooth, top, bottom, threshold) >= min_asymmetry:
+            kept = [pair for pair in kept if pair not in inside] + [(top, bottom)]
+    kept.sort()
+    merged: list[tuple[int, int]] = []
+    for top, bottom in kept:
+        # pieces of one fall (noise broke its run): close together, no rebound between
+        if (merged and top - merged[-1][1] <= max(merged[-1][1] - merged[-1][0], bottom - top)
+                and smooth[top] - smooth[merged[-1][1]] < threshold):
+            first_top = merged[-1][0]
+            merged[-1] = (first_top, first_top + int(np.argmin(smooth[first_top:bottom + 1])))
+        else:
+            merged.append((top, bottom))
+    pairs = np.array(merged, dtype=np.int64).reshape(-1, 2) * block + block // 2
+    return pairs
+
+
+def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float:
+    """How many times faster the fall from ``top`` to ``bottom`` is than the rise before it.
+
+    Faster in rate or in duration, whichever is larger: a small drop after a
+    long ramp and a large drop after a short rise are both saw-tooth drops.
+
+    The rise starts at the previous swing low: going back from ``top`` while
+    the signal keeps within ``swing`` of its lowest value so far (or back to
+    the start of the signal).
+    """
+    span = max(bottom - top, 1)
+    fall_rate = (smooth[top] - smooth[bottom]) / span
+    reach = 4 * span
+    while True:
+        start = max(0, top - reach)
+        backwards = smooth[start : top + 1][::-1]
+        lowest = np.minimum.accumulate(backwards)
+        turned = np.flatnonzero(backwards > lowest + swing)
+        if turned.size or start == 0:
+            low = int(np.argmin(backwards[: turned[0]] if turned.size else backwards))
+            if not turned.size:  # no swing low since the start: only the time is known
+                return low / span
+            rise = backwards[0] - backwards[low]
+            # faster: steeper than the rise, or over in a fraction of its time
+            steeper = fall_rate * low / rise if rise > 0 else np.inf
+            return float(max(steeper, low / span))
+        reach *= 4
+
+
+def _hinge(values: np.ndarray, candidates: np.ndarray) -> tuple[int, np.ndarray]:
+    """Best continuous two-segment line through ``values`` (least squares).
+
+    ``values[i] = a + b i + c max(i - k, 0)`` for each breakpoint ``k`` of
+    ``candidates``; returns the best ``k`` and its ``(a, b, c)``. The ramp
+    ``max(i - k, 0)`` is projected off the straight line's basis, and the sums
+    this needs come from suffix sums: every breakpoint together costs O(n).
+    """
+    n = values.size
+    centre = 0.5 * (n - 1)
+    i = np.arange(n, dtype=float) - centre  # centred: 1 and i are orthogonal
+    ii = float(i @ i)
+    line = values.mean() + (i @ values) / ii * i
+    residual = values - line  # what the straight line leaves
+
+    def after(terms: np.ndarray) -> np.ndarray:  # sums over samples past each candidate
+        suffix = np.concatenate([np.cumsum(terms[::-1])[::-1], [0.0]])
+        return suffix[candidates + 1]
+
+    k = candidates.astype(float) - centre
+    s0 = (n - 1 - candidates).astype(float)
+    s1, s2 = after(i), after(i * i)
+    ramp_sum, ramp_i = s1 - k * s0, s2 - k * s1
+    ramp_norm = s2 - 2 * k * s1 + k * k * s0 - ramp_sum**2 / n - ramp_i**2 / ii
+    ramp_residual = after(residual) * -k + after(i * residual)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain = np.where(ramp_norm > 1e-9, ramp_residual**2 / ramp_norm, 0.0)
+    best = int(np.argmax(gain))
+    # the best breakpoint's coefficients, from its 3 x 3 normal equations
+    ramp = np.maximum(i - k[best], 0.0)
+    basis = np.stack([np.ones(n), i, ramp], axis=1)
+    (a, b, c), *_ = np.linalg.lstsq(basis, values, rcond=None)
+    return int(candidates[best]), np.array([a - b * centre, b, c])
+
+
+def refine_step(
+    values: np.ndarray,
+    top: int,
+    bottom: int,
+    *,
+    low: int,
+    high: int,
+    max_spike: int = 2,
+) -> tuple[int, int, float, float]:
+    """Onset and end of one fall on the full-rate samples.
+
+    Parameters
+    ----------
+    values
+        The whole signal (falls downwards).
+    top, bottom
+        Coarse top and bottom samples of the fall (:func:`fall_candidates`).
+    low, high
+        The fall's neighbourhood, free of other falls: fits use samples in
+        ``[low, high)``.
+    max_spike
+        Spikes up to this many samples are median-filtered out of the fits.
+
+    Returns
+    -------
+    tuple
+        ``(onset, end, peak, trough)``: the onset is the last sample on the
+        line followed before the fall (a hinge fit of the ramp and the fall's
+        first half), the end the first sample of the line followed after it
+        (a hinge fit of the fall's second half and what comes next); ``peak``
+        and ``trough`` are the fitted values there, free of the noise of
+        single samples.
+    """
+    span = max(bottom - top, 2 * max_spike + 1)
+    start = max(low, top - max(span, 24))
+    stop = min(high, bottom + max(span, 24))
+    window = _without_spikes(values[start:stop], max_spike)
+    top_local = int(np.argmax(window[: max(top - start, 0) + span // 2 + 1]))
+    rest = window[top_local:]
+    bottom_local = top_local + int(np.argmin(rest[: bottom - start - top_local + span + 1]))
+    middle_level = 0.5 * (window[top_local] + window[bottom_local])
+    below = np.flatnonzero(window[top_local:bottom_local + 1] <= middle_level)
+    middle = top_local + (int(below[0]) if below.size else (bottom_local - top_local) // 2)
+    middle = min(max(middle, top_local + 1), bottom_local)
+    # onset: a hinge between the ramp before and the fall, breakpoints up to the middle
+    head = window[: middle + 1]
+    onset, (a, b, _) = _hinge(head, np.arange(1, max(middle, 2)))
+    peak = a + b * onset
+    # end: a hinge between the fall and what follows, breakpoints after the middle
+    first = middle - 1
+    tail = window[first:]
+    end, (a, b, _) = _hinge(tail, np.arange(1, max(tail.size - 2, 2)))
+    trough = a + b * end
+    return start + onset, start + first + end, float(peak), float(trough)
+
+
+def _without_spikes(values: np.ndarray, max_spike: int) -> np.ndarray:
+    """``values`` with spikes replaced by the running median.
+
+    Only samples further than a robust 5 sigma from the running median of
+    ``2 * max_spike + 1`` samples are replaced: the others, kinks included,
+    stay as recorded, so the fits that place onsets are not blurred.
+    """
+    values = np.asarray(values, dtype=float)
+    if max_spike < 1 or values.size < 2 * max_spike + 1:
+        return values
+    from scipy.ndimage import median_filter
+
+    median = median_filter(values, size=2 * max_spike + 1, mode="nearest")
+    deviation = values - median
+    spread = _MAD_TO_SIGMA * float(np.median(np.abs(deviation)))
+    spikes = np.abs(deviation) > 5.0 * spread if spread > 0 else deviation != 0
+    return np.where(spikes, median, values)
+
+
+def _prepare(time: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float,
+                                                               float]:
+    """Checked arrays, NaNs bridged, noise level and sample interval of one signal."""
+    time = np.asarray(time, dtype=float)
+    values = np.asarray(values, dtype=float)
+    if time.shape != values.shape or values.ndim != 1:
+        raise SlipwaveError(f"time and signal must be 1-D of one length, got shapes "
+                            f"{time.shape} and {values.shape}")
+    finite = np.isfinite(values)
+    if not finite.any():
+        raise SlipwaveError("the signal has no finite value (all NaN or empty)")
+    if not finite.all():
+        values = _fill_gaps(values)
+    step = max(1, (time.size - 1) // _NOISE_SAMPLE)
+    interval = float(np.median(np.diff(time[::step]))) / step if time.size > 1 else 0.0
+    return time, values, noise_level(values), interval
+
+
+def _falls(
+    time: np.ndarray,
+    values: np.ndarray,
+    smooth: np.ndarray,
+    *,
+    size: float,
+    max_spike: int,
+    longest: int,
+    min_asymmetry: float,
+) -> list[tuple[int, int, float, float]]:
+    """(onset, end, peak, trough) of each fall of ``values`` larger than ``size``."""
+    block = 2 * max_spike + 1
+    if size <= 0.0 or smooth.size < 2 * _LAG or np.ptp(smooth) < 0.5 * size:
+        return []
+    pairs = fall_candidates(smooth, 0.5 * size, block=block, max_duration=longest,
+                            min_asymmetry=min_asymmetry)
+    falls = []
+    previous_end = 0
+    for k, (top, bottom) in enumerate(pairs):
+        following = int(pairs[k + 1, 0]) if k + 1 < len(pairs) else values.size
+        onset, end, peak, trough = refine_step(values, int(top), int(bottom),
+                                               low=previous_end, high=following,
+                                               max_spike=max_spike)
+        if peak - trough >= size and end > onset:
+            falls.append((onset, end, peak, trough))
+            previous_end = end
+    return falls
+
+
+def _step_table(time: np.ndarray, falls: list[tuple[int, int, float, float]],
+                **attrs: float) -> pd.DataFrame:
+    onset = np.array([f[0] for f in falls], dtype=np.int64)
+    end = np.array([f[1] for f in falls], dtype=np.int64)
+    peak = np.array([f[2] for f in falls], dtype=float)
+    trough = np.array([f[3] for f in falls], dtype=float)
+    table = pd.DataFrame({
+        "i_start": onset, "t_start": time[onset], "i_end": end, "t_end": time[end],
+        "peak": peak, "trough": trough, "drop": peak - trough,
+        "duration": time[end] - time[onset],
+    })
+    table.attrs.update(attrs)
+    return table
+
+
+def _longest(values: np.ndarray, max_duration: float | None, interval: float) -> int:
+    if max_duration is None or interval <= 0:
+        return values.size // 10
+    return int(max_duration / interval)
+
+
+def load_drops(
+    time: np.ndarray,
+    load: np.ndarray,
+    *,
+    min_drop: float | None = None,
+    threshold: float = 8.0,
+    max_spike: int = 2,
+    max_duration: float | None = None,
+    min_asymmetry: float = 3.0,
+) -> pd.DataFrame:
+    """Drops of a load-like signal: one row per fast decrease.
+
+    Parameters
+    ----------
+    time
+        Sample times (s).
+    load
+        The signal (T, or any load that rises slowly and falls fast); NaNs are
+        bridged by linear interpolation.
+    min_drop
+        Smallest drop kept, in the signal's unit. ``None``: ``threshold``
+        times the signal's own noise level (:func:`noise_level`).
+    threshold
+        Default ``min_drop`` in units of the noise level.
+    max_spike
+        Excursions of up to this many samples that come back to their level
+        are spikes, not drops, whatever their height.
+    max_duration
+        Longest drop looked for (s); ``None``: a tenth of the recording.
+    min_asymmetry
+        A drop must be at least this many times faster than the rise that
+        preceded it (an oscillation's descending half is not a drop).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``i_start, t_start`` (the onset: the last sample on the ramp before
+        the fast decrease), ``i_end, t_end`` (where the decrease ends),
+        ``peak, trough`` (fitted values there), ``drop = peak - trough``,
+        ``duration``. ``attrs`` holds ``noise``, ``min_size`` and
+        ``sample_interval``. Empty if there is none; a constant signal gives
+        an empty table.
+
+    Raises
+    ------
+    SlipwaveError
+        If the signal has no finite value, or time and signal do not match.
+
+    Examples
+    --------
+    A saw-tooth with white noise and a tall one-sample spike (not a drop):
+
+    >>> rng = np.random.default_rng(1)
+    >>> t = np.arange(6000) * 0.01
+    >>> load = 2.0 * (t % 20.0) + rng.normal(0, 0.04, t.size)
+    >>> load[1500] += 30.0
+    >>> drops = load_drops(t, load)
+    >>> drops[["i_start", "i_end"]].values.tolist()
+    [[1999, 2000], [3999, 4000]]
+    >>> drops["drop"].round().tolist()
+    [40.0, 40.0]
+    """
+    time, values, sigma, interval = _prepare(time, load)
+    size = threshold * sigma if min_drop is None else float(min_drop)
+    falls = _falls(time, values, despike(values, max_spike), size=size, max_spike=max_spike,
+                   longest=_longest(values, max_duration, interval),
+                   min_asymmetry=min_asymmetry)
+    return _step_table(time, falls, noise=sigma, min_size=size, sample_interval=interval)
+
+
+def _level(values: np.ndarray, first: int, last: int) -> float:
+    """Median of ``values[first:last]`` (clipped to the signal), NaN if empty.
+
+    Long windows are thinned to about 1000 evenly spaced samples.
+    """
+    first, last = max(first, 0), min(last, values.size)
+    segment = values[first:last:max(1, (last - first) // 1000)]
+    segment = segment[np.isfinite(segment)]
+    return float(np.median(segment)) if segment.size else np.nan
+
+
+def _changes_at(time: np.ndarray, values: np.ndarray, drops: pd.DataFrame, *, size: float,
+                max_spike: int) -> pd.DataFrame:
+    """How a signal changed across each of ``drops`` (one row per drop)."""
+    rows = []
+    for start, end in zip(drops["i_start"].to_numpy(dtype=np.int64),
+                          drops["i_end"].to_numpy(dtype=np.int64), strict=True):
+        width = max(int(end - start), 5)  # levels over windows as long as the event
+        before = _level(values, start - width, start + 1)
+        after = _level(values, end, end + width)
+        jump = after - before
+        # when the signal had made half its change: which edge moved first
+        low = max(start - width, 0)
+        window = _without_spikes(values[low : end + width], max_spike)
+        crossed = np.flatnonzero(np.sign(jump) * (window - before) >= 0.5 * abs(jump))
+        middle = low + int(crossed[0]) if crossed.size and jump != 0 else int(start)
+        rows.append((middle, time[middle], end, time[end], max(before, after),
+                     min(before, after), abs(jump), time[end] - time[middle], before, after,
+                     jump, abs(jump) >= size))
+    columns = [*STEP_COLUMNS, "before", "after", "jump", "significant"]
+    table = pd.DataFrame(rows, columns=columns)
+    return table.astype({"i_start": np.int64, "i_end": np.int64, "significant": bool})
+
+
+def edge_jumps(
+    time: np.ndarray,
+    displacement: np.ndarray,
+    *,
+    at: pd.DataFrame | None = None,
+    min_jump: float | None = None,
+    threshold: float = 8.0,
+    max_spike: int = 2,
+    max_duration: float | None = None,
+    min_asymmetry: float = 3.0,
+) -> pd.DataFrame:
+    """Steps of a displacement signal (DG, DD), of either sign.
+
+    Parameters
+    ----------
+    time, displacement
+        Sample times (s) and the edge displacement.
+    at
+        T drops (:func:`load_drops`): measure the step across each of them
+        (median levels over windows as long as the drop, before its onset and
+        after its end) instead of looking for steps anywhere. This is how
+        :func:`~slipwave.events.detect_events` reads the edges: it sees steps
+        as slow as the drop and below the search's threshold.
+    min_jump, threshold, max_spike, max_duration, min_asymmetry
+        As in :func:`load_drops` (``min_jump`` standing for ``min_drop``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The columns of :func:`load_drops` (``peak`` and ``trough`` are the
+        higher and the lower level) plus ``before``, ``after`` and ``jump =
+        after - before`` (signed), sorted by onset. With ``at``: one row per
+        drop, in its order, ``i_start``/``t_start`` being when the edge had
+        made half its step, and a column ``significant`` (``|jump| >=
+        min_jump``).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(2)
+    >>> t = np.arange(4000) * 0.01
+    >>> dg = np.where(t < 10, 0.0, -0.2) + np.where(t < 30, 0.0, 0.1)
+    >>> dg = dg + rng.normal(0, 0.0015, t.size)
+    >>> jumps = edge_jumps(t, dg)
+    >>> jumps[["i_start", "jump"]].round(2).values.tolist()
+    [[999.0, -0.2], [2999.0, 0.1]]
+
+    The same edge read across two given drops, the second without a step:
+
+    >>> drops = pd.DataFrame({"i_start": [999, 1999], "i_end": [1005, 2005]})
+    >>> at = edge_jumps(t, dg, at=drops)
+    >>> at["jump"].round(2).tolist(), at["significant"].tolist()
+    ([-0.2, 0.0], [True, False])
+    """
+    time, values, sigma, interval = _prepare(time, displacement)
+    size = threshold * sigma if min_jump is None else float(min_jump)
+    if at is not None:
+        table = _changes_at(time, values, at, size=size, max_spike=max_spike)
+        table.attrs.update(noise=sigma, min_size=size, sample_interval=interval)
+        return table
+    smooth = despike(values, max_spike)
+    parts = []
+    for sign in (1.0, -1.0):  # falls of the signal, then of its opposite (rises)
+        if sign < 0:
+            values, smooth = -values, -smooth
+        falls = _falls(time, values, smooth, size=size, max_spike=max_spike,
+                       longest=_longest(values, max_duration, interval),
+                       min_asymmetry=min_asymmetry)
+        found = _step_table(time, falls)
+        found["peak"] *= sign
+        found["trough"] *= sign
+        parts.append(found.assign(before=found["peak"], after=found["trough"],
+                                  jump=found["trough"] - found["peak"]))
+    table = pd.concat(parts, ignore_index=True).sort_values("i_start", ignore_index=True)
+    table.attrs.update(noise=sigma, min_size=size, sample_interval=interval)
+    return table

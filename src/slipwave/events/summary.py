@@ -1,0 +1,195 @@
+"""What the events say about a test: phases, friction ratios, wave counts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+from scipy import stats
+
+from slipwave.errors import SlipwaveError
+
+PHASES = ("normal_loading", "stick", "partial_slip", "gross_slip")
+"""Phase labels of :func:`segment_phases`, in the order of a test."""
+
+KINDS = ("partial_slip", "gross_slip")
+
+
+def normal_loading_end(recording: xr.Dataset, *, plateau_fraction: float = 0.98) -> int:
+    """Index of the first sample where |N| reaches its plateau.
+
+    The plateau is the median |N| over the second half of the recording; the
+    normal loading ends where |N| first reaches ``plateau_fraction`` of it.
+
+    Examples
+    --------
+    >>> ds = xr.Dataset({"N": ("time", -np.minimum(np.arange(20.0), 10.0))})
+    >>> normal_loading_end(ds)
+    10
+    """
+    normal = np.abs(recording["N"].values.astype(float))
+    if not np.isfinite(normal).any():
+        raise SlipwaveError(f"{recording.attrs.get('source', 'the recording')}: "
+                            "N has no finite value")
+    plateau = float(np.nanmedian(normal[normal.size // 2:]))
+    reached = np.flatnonzero(normal >= plateau_fraction * plateau)
+    return int(reached[0]) if reached.size else normal.size
+
+
+def segment_phases(recording: xr.Dataset, events: pd.DataFrame) -> xr.DataArray:
+    """A phase label for every sample: normal loading, stick, partial or gross slip.
+
+    Samples before |N| reaches its plateau (:func:`normal_loading_end`) are
+    ``normal_loading``; samples from an event's onset to its end take the
+    event's kind (gross wins where events overlap; unclassified events count
+    as partial slips); the rest is ``stick``.
+
+    Examples
+    --------
+    >>> ds = xr.Dataset({"N": ("time", np.r_[-np.arange(5.0), np.full(10, -5.0)])},
+    ...                 coords={"time": np.arange(15.0)})
+    >>> events = pd.DataFrame({"kind": ["gross_slip"], "i_start": [9], "i_end": [11]})
+    >>> phase = segment_phases(ds, events).values.tolist()
+    >>> phase[4:6], phase[9:13]
+    (['normal_loading', 'stick'], ['stick', 'gross_slip', 'gross_slip', 'stick'])
+    """
+    size = recording.sizes["time"]
+    label = np.full(size, "stick", dtype=object)
+    label[: normal_loading_end(recording)] = "normal_loading"
+    for kind in ("unclassified", "partial_slip", "gross_slip"):
+        chosen = events[events["kind"] == kind]
+        for start, end in zip(chosen["i_start"], chosen["i_end"], strict=True):
+            label[int(start) + 1 : int(end) + 1] = "partial_slip" if kind != "gross_slip" \
+                else kind
+    phase = xr.DataArray(label.astype(str), dims="time", name="phase",
+                         coords={"time": recording["time"]} if "time" in recording.coords
+                         else None)
+    phase.attrs = {"long_name": "phase of the test",
+                   "flag_values": " ".join(PHASES)}
+    return phase
+
+
+def _spread(values: np.ndarray, confidence: float) -> dict[str, float]:
+    """Mean, standard deviation and a Student-t confidence interval of the mean."""
+    count = values.size
+    mean = float(values.mean()) if count else np.nan
+    std = float(values.std(ddof=1)) if count > 1 else np.nan
+    if count > 1:
+        half = float(stats.t.ppf(0.5 + confidence / 2, count - 1)) * std / np.sqrt(count)
+    else:
+        half = np.nan
+    return {"mean": mean, "std": std, "ci_low": mean - half, "ci_high": mean + half}
+
+
+def friction_ratio(events: pd.DataFrame, *, confidence: float = 0.95) -> xr.Dataset:
+    """T/|N| at each gross slip, before the drop (static) and after it (dynamic).
+
+    Parameters
+    ----------
+    events
+        From :func:`~slipwave.events.detect_events`.
+    confidence
+        Level of the confidence interval of the means (Student t).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``static`` and ``dynamic`` along ``slip`` (with ``time``, the onsets),
+        and scalars ``static_mean``, ``static_std``, ``static_ci_low``,
+        ``static_ci_high`` and the same for ``dynamic``. No gross slip: empty
+        ``slip`` and NaN scalars.
+
+    Examples
+    --------
+    >>> events = pd.DataFrame({"kind": ["gross_slip"] * 3 + ["partial_slip"],
+    ...                        "t_start": [1.0, 2.0, 3.0, 4.0],
+    ...                        "ratio_before": [0.9, 1.0, 1.1, 0.5],
+    ...                        "ratio_after": [0.6, 0.6, 0.6, 0.45]})
+    >>> ratio = friction_ratio(events)
+    >>> float(ratio["static_mean"]), round(float(ratio["static_ci_high"]), 3)
+    (1.0, 1.248)
+    """
+    gross = events[events["kind"] == "gross_slip"]
+    data: dict[str, tuple] = {}
+    for name, column, meaning in (("static", "ratio_before", "before the drop (peak)"),
+                                  ("dynamic", "ratio_after", "after the drop")):
+        values = gross[column].to_numpy(dtype=float)
+        values = values[np.isfinite(values)] if values.size else values
+        data[name] = ("slip", gross[column].to_numpy(dtype=float),
+                      {"units": "1", "long_name": f"T/|N| at gross slips, {meaning}"})
+        for key, value in _spread(values, confidence).items():
+            data[f"{name}_{key}"] = ((), value, {
+                "units": "1",
+                "long_name": f"{key.replace('_', ' ')} of the {name} T/|N|"
+                + (f" ({confidence:.0%} confidence, Student t)" if "ci" in key else ""),
+            })
+    return xr.Dataset(
+        data,
+        coords={"time": ("slip", gross["t_start"].to_numpy(dtype=float),
+                         {"units": "s", "long_name": "onset of the gross slip"})},
+        attrs={"confidence": confidence, "gross_slips": len(gross)},
+    )
+
+
+def wave_counts(events: pd.DataFrame) -> dict[str, int]:
+    """Number of partial and gross slips (and unclassified drops, if any).
+
+    Examples
+    --------
+    >>> wave_counts(pd.DataFrame({"kind": ["gross_slip", "partial_slip", "gross_slip"]}))
+    {'partial_slip': 1, 'gross_slip': 2}
+    """
+    counts = {kind: int((events["kind"] == kind).sum()) for kind in KINDS}
+    unclassified = int((events["kind"] == "unclassified").sum())
+    if unclassified:
+        counts["unclassified"] = unclassified
+    return counts
+
+
+def phase_durations(phase: xr.DataArray) -> dict[str, float]:
+    """Time (s) spent in each phase: samples times the sampling interval."""
+    time = phase["time"].values.astype(float)
+    interval = float(np.median(np.diff(time))) if time.size > 1 else 0.0
+    labels = phase.values
+    return {name: float((labels == name).sum()) * interval for name in PHASES}
+
+
+def summary_row(test_id: str, dataset: xr.Dataset) -> dict[str, object]:
+    """One campaign-summary row from :func:`events_dataset`'s Dataset.
+
+    Friction ratios at gross slips (mean, std, confidence interval), wave
+    counts, time spent in each phase, warnings.
+    """
+    kinds = pd.DataFrame({"kind": dataset["kind"].values.astype(str)})
+    row: dict[str, object] = {"test_id": test_id}
+    row.update({f"{k}_waves": v for k, v in wave_counts(kinds).items()})
+    for name in ("static", "dynamic"):
+        for key in ("mean", "std", "ci_low", "ci_high"):
+            row[f"{name}_ratio_{key}"] = float(dataset[f"{name}_{key}"])
+    row.update({f"{k}_s": v for k, v in phase_durations(dataset["phase"]).items()})
+    row["warnings"] = " | ".join(filter(None, str(dataset.attrs.get("warnings", "")).split("\n")))
+    return row
+
+
+def events_dataset(events: pd.DataFrame, phase: xr.DataArray) -> xr.Dataset:
+    """Events (along ``event``), phases (along ``time``) and friction ratios in one Dataset.
+
+    Columns become variables with CF ``units`` and ``long_name``; the
+    detection's noise levels, thresholds and warnings become attributes.
+    """
+    from slipwave.events.slips import EVENT_COLUMNS, EVENT_DESCRIPTIONS, EVENT_UNITS
+
+    data = {}
+    for column in EVENT_COLUMNS:
+        attrs = {"long_name": EVENT_DESCRIPTIONS[column]}
+        if column in EVENT_UNITS:
+            attrs["units"] = EVENT_UNITS[column]
+        values = events[column].to_numpy()
+        data[column] = ("event", values.astype(str) if values.dtype == object else values, attrs)
+    ratio = friction_ratio(events).rename({"time": "slip_time"})
+    dataset = xr.Dataset(data, coords={"event": np.arange(len(events))})
+    dataset = xr.merge([dataset, phase.to_dataset(), ratio], combine_attrs="drop")
+    attrs = {str(k): v for k, v in events.attrs.items() if k != "warnings"}
+    dataset.attrs = {**attrs, "warnings": "\n".join(events.attrs.get("warnings", [])),
+                     **wave_counts(events)}
+    return dataset
