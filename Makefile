@@ -30,5 +30,6 @@ bench: $(STAMP)
 	@for bench in benchmarks/bench_*.py; do echo "== $$bench"; $(BIN)/python $$bench || exit 1; done
 
 clean:
-	rm -rf results .snakemake
+	rm -rf .snakemake
+	find results -mindepth 1 ! -name README.md -delete
 	find reports -mindepth 1 ! -name README.md -delete

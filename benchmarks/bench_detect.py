@@ -15,14 +15,17 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import time
+from pathlib import Path
 
 import numpy as np
+import scipy.io
 
 from slipwave.bench.generate import BenchTest, simulate_test
 from slipwave.bench.signals import DEFAULT_SENSORS, apply_sensors, clean_signals
-from slipwave.events import detect_events
+from slipwave.events import detect_events, load_drops
 
 SAMPLES = 10_000_000
+COLAS = Path(__file__).parents[1].parent / "shared/data/colas2019/k1002Nm_v42.mat"
 TARGET = 10e6  # samples per second
 
 
@@ -45,6 +48,16 @@ def main() -> None:
     print(f"detect_events: {recording.sizes['time']:,} samples x 5 channels, {len(events)} "
           f"events {counts}: median {median:.2f} s (best {best:.2f} s) = "
           f"{rate / 1e6:.1f} M samples/s ({status} the {TARGET / 1e6:.0f} M samples/s target)")
+
+    if COLAS.exists():  # an event-dense real record: the cost per event shows
+        mat = scipy.io.loadmat(COLAS)
+        time_s, force = mat["t"].ravel(), mat["Fnorm"].ravel()
+        start = time.perf_counter()
+        drops = load_drops(time_s, force)
+        took = time.perf_counter() - start
+        print(f"load_drops on {COLAS.name}: {force.size:,} samples, {len(drops)} drops in "
+              f"{took:.2f} s ({force.size / took / 1e6:.1f} M samples/s, "
+              f"{took / max(len(drops), 1) * 1e3:.2f} ms per drop)")
 
 
 if __name__ == "__main__":

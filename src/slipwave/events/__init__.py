@@ -8,6 +8,7 @@ from slipwave.events.slips import (
     detect_events,
 )
 from slipwave.events.steps import (
+    STEP_COLUMNS,
     despike,
     edge_jumps,
     fall_candidates,
@@ -31,6 +32,7 @@ __all__ = [
     "EVENT_DESCRIPTIONS",
     "EVENT_UNITS",
     "PHASES",
+    "STEP_COLUMNS",
     "classify_events",
     "despike",
     "detect_events",

@@ -69,8 +69,8 @@ def classify_events(
     jumps
         ``{"DG": ..., "DD": ...}``: edge jumps (:func:`~slipwave.events.edge_jumps`)
         of the left and right edges, found anywhere or measured at the drops
-        (rows whose ``significant`` is false are no jump); a missing key
-        means the channel is missing.
+        (rows whose ``significant`` is false are no jump). Without both, the
+        drops are ``unclassified``.
     gross_edge_ratio
         A drop is a gross slip when the left edge jumped, in the same direction
         as the right edge (or alone), by at least this times the right edge's
@@ -130,10 +130,10 @@ def classify_events(
     left, right = moved["DG"], moved["DD"]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(right != 0, left / right, np.where(left != 0, np.inf, np.nan))
-    gross = (left != 0) & ((right == 0) | (ratio >= gross_edge_ratio))
-    if "DG" in jumps:
+    gross = (left != 0) & ((right == 0) | (ratio >= gross_edge_ratio))  # DG alone: gross
+    if "DG" in jumps and "DD" in jumps:
         kind = np.where(gross, "gross_slip", "partial_slip")
-    else:
+    else:  # the rule compares the two edges
         kind = np.full(starts.size, "unclassified")
     lag = onsets["DG"] - onsets["DD"]
     direction = np.where(lag >= resolution_at, "right_to_left",
@@ -213,12 +213,12 @@ def detect_events(
             jumps[channel] = edge_jumps(time, np.asarray(recording[channel].values, dtype=float),
                                         at=drops, min_jump=min_jump, threshold=threshold,
                                         max_spike=max_spike)
-    if "DG" not in jumps:
-        warnings.append("no usable DG channel: events are T drops, not classified "
-                        "into partial and gross slips")
-    elif "DD" not in jumps:
-        warnings.append("no usable DD channel: a DG jump alone makes a gross slip")
-    events = classify_events(drops, jumps, gross_edge_ratio=gross_edge_ratio)
+    missing = [channel for channel in ("DG", "DD") if channel not in jumps]
+    if missing:
+        warnings.append(f"no usable {' or '.join(missing)} channel: events are T drops, "
+                        "not classified into partial and gross slips")
+    events = classify_events(drops, {} if missing else jumps,
+                             gross_edge_ratio=gross_edge_ratio)
     normal = np.abs(np.asarray(recording["N"].values, dtype=float))
     starts = events["i_start"].to_numpy(dtype=np.int64)
     ends = events["i_end"].to_numpy(dtype=np.int64)

@@ -30,7 +30,8 @@ STEP_COLUMNS = ("i_start", "t_start", "i_end", "t_end", "peak", "trough", "drop"
 
 _MAD_TO_SIGMA = 1.4826  # median absolute deviation of a Gaussian -> its standard deviation
 _NOISE_SAMPLE = 200_000  # differences used for the noise estimate (strided subsample)
-_LAG = 4  # blocks over which a pyramid level measures a fall
+_LAG = 4  # blocks over which a pyramid level measures a fall, at most
+_LAGS = (1, 2, _LAG)
 
 
 def noise_level(values: np.ndarray) -> float:
@@ -82,6 +83,11 @@ def despike(values: np.ndarray, max_spike: int = 2) -> np.ndarray:
     block = 2 * max_spike + 1
     count = values.size // block
     blocks = values[: count * block].reshape(count, block)
+    if block == 5:  # the default: a median-of-5 network, without partition's copy
+        a, b, c, d, e = (blocks[:, k] for k in range(5))
+        low = np.maximum(np.minimum(a, b), np.minimum(d, e))
+        high = np.minimum(np.maximum(a, b), np.maximum(d, e))
+        return np.maximum(np.minimum(low, high), np.minimum(np.maximum(low, high), c))
     return np.partition(blocks, max_spike, axis=1)[:, max_spike]
 
 
@@ -110,9 +116,9 @@ def fall_candidates(
         The signal from :func:`despike`, one value per block of ``block``
         samples.
     threshold
-        A fall is kept when the signal decreases by more than this within
-        ``_LAG`` blocks of one pyramid level (levels average pairs of blocks,
-        so each sees falls about twice as long as the one below).
+        A fall is kept when the signal decreases by more than this within 1, 2
+        or 4 blocks of one pyramid level (levels average pairs of blocks, so
+        each sees falls about twice as long as the one below).
     block
         Samples per value of ``smooth``, to express the result in samples.
     max_duration
@@ -130,20 +136,27 @@ def fall_candidates(
         sorted, not overlapping.
     """
     levels: list[tuple[int, int]] = []
+    seen = np.zeros(smooth.size, dtype=bool)
     level = smooth
     scale = 1
     while level.size > _LAG:
-        fall = level[:-_LAG] - level[_LAG:]
-        marked = np.flatnonzero(fall > threshold)
-        if marked.size:
-            # runs of consecutive marked positions, one per fall
-            breaks = np.flatnonzero(np.diff(marked) > _LAG)
+        for lag in _LAGS:  # a short lag sees drops that a fast ramp would hide from a long one
+            fall = level[:-lag] - level[lag:]
+            marked = np.flatnonzero(fall > threshold)
+            if not marked.size:
+                continue
+            # runs of marked positions (gaps shorter than the lag bridged), one per fall
+            breaks = np.flatnonzero(np.diff(marked) > lag)
             firsts = marked[np.concatenate([[0], breaks + 1])]
             lasts = marked[np.concatenate([breaks, [marked.size - 1]])]
             for first, last in zip(firsts, lasts, strict=True):
                 top = first + int(np.argmax(level[first : last + 1]))
-                bottom = top + int(np.argmin(level[top : last + _LAG + 1]))
-                levels.append((top * scale, max(bottom, top + 1) * scale))
+                bottom = top + int(np.argmin(level[top : last + lag + 1]))
+                top, bottom = top * scale, max(bottom, top + 1) * scale
+                if not seen[top : bottom + 1].all():  # not a piece of a fall seen already
+                    whole = _whole_fall(smooth, top, bottom, threshold)
+                    seen[whole[0] : whole[1] + 1] = True
+                    levels.append(whole)
         if _LAG * scale * 2 * block > max_duration or level.size < 2 * (_LAG + 1):
             break
         even = level.size // 2 * 2
@@ -151,9 +164,10 @@ def fall_candidates(
         scale *= 2
     # finest first; a coarser fall replaces finer pieces of itself (it falls further
     # without rebounding on the way) and is dropped where it spans several falls
-    kept: list[tuple[int, int]] = []
-    for top, bottom in levels:
-        inside = [(a, b) for a, b in kept if top <= b and a <= bottom]
+    falls: dict[int, tuple[int, int]] = {}
+    owner = np.full(smooth.size, -1)  # which kept fall covers each value
+    for label, (top, bottom) in enumerate(dict.fromkeys(levels)):
+        inside = [falls[k] for k in set(owner[top : bottom + 1].tolist()) - {-1}]
         if inside:
             segment = smooth[top : bottom + 1]
             rebound = float(np.max(segment - np.minimum.accumulate(segment)))
@@ -161,8 +175,12 @@ def fall_candidates(
             if rebound > threshold or further <= threshold:
                 continue
         if _asymmetry(smooth, top, bottom, threshold) >= min_asymmetry:
-            kept = [pair for pair in kept if pair not in inside] + [(top, bottom)]
-    kept.sort()
+            for a, b in inside:
+                owner[a : b + 1] = -1
+            falls = {k: pair for k, pair in falls.items() if pair not in inside}
+            falls[label] = (top, bottom)
+            owner[top : bottom + 1] = label
+    kept = sorted(falls.values())
     merged: list[tuple[int, int]] = []
     for top, bottom in kept:
         # pieces of one fall (noise broke its run): close together, no rebound between
@@ -174,6 +192,39 @@ def fall_candidates(
             merged.append((top, bottom))
     pairs = np.array(merged, dtype=np.int64).reshape(-1, 2) * block + block // 2
     return pairs
+
+
+def _turn(values: np.ndarray, swing: float) -> int:
+    """Index of the lowest value of ``values`` before they rise by more than ``swing``."""
+    lowest = np.minimum.accumulate(values)
+    turned = np.flatnonzero(values > lowest + swing)
+    return int(np.argmin(values[: turned[0]] if turned.size else values))
+
+
+def _whole_fall(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tuple[int, int]:
+    """The whole fall a piece ``(top, bottom)`` belongs to.
+
+    Back to where the signal was highest before it turned down, on to where it
+    was lowest before it rose again (turns are rises or falls of more than
+    ``swing``): a short window can catch a piece of a long, slow fall, which
+    must be judged whole.
+    """
+    span = max(bottom - top, 1)
+    reach = 4 * span
+    while True:
+        start = max(0, top - reach)
+        back = _turn(-smooth[start : top + 1][::-1], swing)
+        if back < top - start or start == 0:
+            break
+        reach *= 4
+    reach = 4 * span
+    while True:
+        stop = min(smooth.size, bottom + reach)
+        on = _turn(smooth[bottom:stop], swing)
+        if on < stop - bottom - 1 or stop == smooth.size:
+            break
+        reach *= 4
+    return top - back, bottom + on
 
 
 def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float:
@@ -199,9 +250,10 @@ def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float
             if not turned.size:  # no swing low since the start: only the time is known
                 return low / span
             rise = backwards[0] - backwards[low]
+            if rise <= swing:  # no real rise before: the middle of a longer fall
+                return 0.0
             # faster: steeper than the rise, or over in a fraction of its time
-            steeper = fall_rate * low / rise if rise > 0 else np.inf
-            return float(max(steeper, low / span))
+            return float(max(fall_rate * low / rise, low / span))
         reach *= 4
 
 
@@ -286,14 +338,26 @@ def refine_step(
     middle = min(max(middle, top_local + 1), bottom_local)
     # onset: a hinge between the ramp before and the fall, breakpoints up to the middle
     head = window[: middle + 1]
-    onset, (a, b, _) = _hinge(head, np.arange(1, max(middle, 2)))
-    peak = a + b * onset
+    onset, _ = _hinge(head, np.arange(1, max(middle, 2)))
     # end: a hinge between the fall and what follows, breakpoints after the middle
     first = middle - 1
     tail = window[first:]
-    end, (a, b, _) = _hinge(tail, np.arange(1, max(tail.size - 2, 2)))
-    trough = a + b * end
-    return start + onset, start + first + end, float(peak), float(trough)
+    end, _ = _hinge(tail, np.arange(1, max(tail.size - 2, 2)))
+    end += first
+    # levels from the straight lines before the onset and after the end (the hinges'
+    # continuity would pull them towards the fall)
+    peak = _line_at(window[: onset + 1], onset)
+    # the end sample may still be on the fall when the kink lies just after it
+    trough = _line_at(window[end + 1 :], -1) if end + 1 < window.size else float(window[-1])
+    return start + onset, start + end, peak, trough
+
+
+def _line_at(values: np.ndarray, at: int) -> float:
+    """The least-squares straight line through ``values``, evaluated at index ``at``."""
+    if values.size < 3:
+        return float(values[min(max(at, 0), values.size - 1)])
+    slope, intercept = np.polyfit(np.arange(values.size, dtype=float), values, 1)
+    return float(intercept + slope * at)
 
 
 def _without_spikes(values: np.ndarray, max_spike: int) -> np.ndarray:

@@ -188,7 +188,7 @@ def events_dataset(events: pd.DataFrame, phase: xr.DataArray) -> xr.Dataset:
         data[column] = ("event", values.astype(str) if values.dtype == object else values, attrs)
     ratio = friction_ratio(events).rename({"time": "slip_time"})
     dataset = xr.Dataset(data, coords={"event": np.arange(len(events))})
-    dataset = xr.merge([dataset, phase.to_dataset(), ratio], combine_attrs="drop")
+    dataset = xr.merge([dataset, phase.to_dataset(), ratio], combine_attrs="override")
     attrs = {str(k): v for k, v in events.attrs.items() if k != "warnings"}
     dataset.attrs = {**attrs, "warnings": "\n".join(events.attrs.get("warnings", [])),
                      **wave_counts(events)}
