@@ -89,7 +89,8 @@ def classify_events(
     -------
     pandas.DataFrame
         ``drops`` with ``kind``, ``DG_jump``, ``DD_jump`` (the matched jumps,
-        0 when the edge did not jump), ``edge_ratio`` and ``direction``.
+        significant or not; 0 when none matched), ``edge_ratio`` and
+        ``direction`` (from significant jumps only).
 
     Examples
     --------
@@ -110,27 +111,33 @@ def classify_events(
         resolution_at = np.full(starts.size, float(resolution))
     slack = ends - starts if tolerance is None else np.full(starts.size, float(tolerance))
     moved: dict[str, np.ndarray] = {}
+    real: dict[str, np.ndarray] = {}
     onsets: dict[str, np.ndarray] = {}
     for channel in ("DG", "DD"):
         moved[channel] = np.zeros(starts.size)
+        real[channel] = np.zeros(starts.size, dtype=bool)
         onsets[channel] = np.full(starts.size, np.nan)
         found = jumps.get(channel)
         if found is None or found.empty:
             continue
-        if "significant" in found:
-            found = found[found["significant"]]
         jump_starts = found["t_start"].to_numpy(dtype=float)
         size = found["jump"].to_numpy(dtype=float)
+        significant = (found["significant"].to_numpy(dtype=bool) if "significant" in found
+                       else np.ones(size.size, dtype=bool))
         for k in range(starts.size):
             near = (jump_starts >= starts[k] - slack[k]) & (jump_starts <= ends[k] + slack[k])
             if near.any():  # the largest: a small precursor (creep) is not the slip
                 best = np.flatnonzero(near)[np.argmax(np.abs(size[near]))]
                 moved[channel][k] = size[best]
-                onsets[channel][k] = jump_starts[best]
+                real[channel][k] = significant[best]
+                if significant[best]:
+                    onsets[channel][k] = jump_starts[best]
     left, right = moved["DG"], moved["DD"]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(right != 0, left / right, np.where(left != 0, np.inf, np.nan))
-    gross = (left != 0) & ((right == 0) | (ratio >= gross_edge_ratio))  # DG alone: gross
+    # the left edge jumped, and at least so far the right edge's way (even a step of the
+    # right edge below its threshold has a sign); DG alone: gross
+    gross = real["DG"] & (ratio >= gross_edge_ratio)
     if "DG" in jumps and "DD" in jumps:
         kind = np.where(gross, "gross_slip", "partial_slip")
     else:  # the rule compares the two edges
