@@ -129,3 +129,23 @@ def test_kymograph_band_and_reference():
     assert np.allclose(kymo["intensity"].values[3, 21:], 0.0)
     with pytest.raises(SlipwaveError, match="has no pixel row"):
         kymograph(frames, geometry, band_mm=(50.0, 60.0))
+
+
+def test_command_line_kymograph_on_a_damaged_video(clip, tmp_path, capsys):
+    from slipwave.cli import main
+    from slipwave.io import read_dataset
+
+    whole = write_video(clip, times(len(clip)), tmp_path / "clip.mkv", codec="ffv1")
+    cut = tmp_path / "cut.mkv"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 2 // 3])
+    output = tmp_path / "kymo.nc"
+    assert main(["kymograph", str(cut), "-o", str(output), "--geometry", "140", "26",
+                 "294"]) == 1
+    assert "damaged video after its last good frame" in capsys.readouterr().err
+    assert not output.exists()  # nothing half-written
+    assert main(["kymograph", str(cut), "-o", str(output), "--geometry", "140", "26", "294",
+                 "--keep-partial"]) == 0
+    assert "the frames before it were kept" in capsys.readouterr().err
+    kymo = read_dataset(output)
+    assert 40 < kymo.sizes["time"] < len(clip)
+    assert "damaged video" in kymo.attrs["warnings"]

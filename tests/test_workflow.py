@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -64,9 +65,15 @@ def test_full_run_on_default_campaign(workdir):
         assert summary.loc[test_id, "gross_slip_waves"] == (visible["kind"] == "gross_slip").sum()
         page = (workdir / f"reports/{test_id}.html").read_text()
         assert f"Test {test_id}" in page
-        assert "<h2>Events</h2>" in page
-        for rule in ("ingest", "detect", "test_page"):
+        assert "<h2>Events</h2>" in page and "<h2>Video</h2>" in page
+        for rule in ("ingest", "detect", "kymograph", "waves", "test_page"):
             assert (workdir / f"results/logs/{rule}/{test_id}.log").exists()
+        kymo = read_dataset(workdir / f"results/{test_id}/kymograph.nc")
+        assert kymo.sizes["time"] > 6900 and kymo["x"].attrs["units"] == "mm"
+        fused = pd.read_csv(workdir / f"results/{test_id}/events_video.csv")
+        assert (fused["source"] != "video").sum() == len(events)
+        clock = json.loads((workdir / f"results/{test_id}/clock.json").read_text())
+        assert clock["pairs"] >= 30
 
 
 def test_column_map_from_config(workdir):

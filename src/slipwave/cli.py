@@ -34,7 +34,19 @@ def _report(args: argparse.Namespace) -> None:
     from slipwave.report import write_test_page
 
     events = None if args.events is None else read_dataset(args.events)
-    write_test_page(read_dataset(args.recording), args.output, events)
+    video = None
+    if args.kymograph is not None:
+        import json
+
+        import pandas as pd
+
+        from slipwave.report import video_summary
+
+        if args.waves is None or args.clock is None:
+            raise SlipwaveError("--kymograph needs --waves and --clock")
+        video = video_summary(read_dataset(args.kymograph), pd.read_csv(args.waves),
+                              json.loads(args.clock.read_text()), args.frames, events)
+    write_test_page(read_dataset(args.recording), args.output, events, video)
     print(f"{args.recording} -> {args.output}")
 
 
@@ -75,6 +87,54 @@ def _summarize(args: argparse.Namespace) -> None:
     with atomic_output(args.output) as temporary:
         pd.DataFrame(rows).to_csv(temporary, index=False, float_format="%.6g")
     print(f"{len(rows)} tests -> {args.output}")
+
+
+def _kymograph(args: argparse.Namespace) -> None:
+    from slipwave.io import write_dataset
+    from slipwave.video import Geometry, find_geometry, kymograph, open_frames
+
+    source = open_frames(args.frames, fps=args.fps, keep_partial=args.keep_partial)
+    if args.geometry:
+        row, left, right = args.geometry
+        geometry = Geometry(int(row), left, right, args.length)
+    else:
+        geometry = find_geometry(source, args.length)
+    kymo = kymograph(source, geometry, band_mm=tuple(args.band))
+    kymo.attrs["source"] = str(args.frames)
+    kymo.attrs["warnings"] = "\n".join(source.warnings)
+    write_dataset(kymo, args.output)
+    for warning in source.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    print(f"{args.frames} -> {args.output}: {kymo.sizes['time']} frames, contact at columns "
+          f"{geometry.left:g}-{geometry.right:g}, interface row {geometry.interface_row}")
+
+
+def _waves(args: argparse.Namespace) -> None:
+    import json
+
+    from slipwave.events import EVENT_COLUMNS
+    from slipwave.io import atomic_output, read_dataset
+    from slipwave.video.waves import align_clocks, fuse, track_waves
+
+    kymo = read_dataset(args.kymograph)
+    waves = track_waves(kymo)
+    recording = read_dataset(args.recording)
+    events = read_dataset(args.events)
+    table = events[list(EVENT_COLUMNS)].to_dataframe().reset_index(drop=True)
+    clock = align_clocks(waves, kymo, recording, table)
+    waves = waves.assign(t_start_card=clock.acquisition_time(waves["t_start"].to_numpy()),
+                         t_end_card=clock.acquisition_time(waves["t_end"].to_numpy()))
+    with atomic_output(args.output) as temporary:
+        waves.to_csv(temporary, index=False, float_format="%.6g")
+    with atomic_output(args.fused) as temporary:
+        fuse(table, waves, clock).to_csv(temporary, index=False, float_format="%.6g")
+    with atomic_output(args.clock) as temporary:
+        temporary.write_text(json.dumps({"offset_s": clock.offset, "rate": clock.rate,
+                                         "residual_s": clock.residual, "method": clock.method,
+                                         "pairs": clock.pairs}, indent=2) + "\n")
+    print(f"{args.kymograph} -> {args.output}: {len(waves)} waves; camera clock: "
+          f"card = {clock.offset:.4f} s + {clock.rate:.6f} x camera ({clock.method}, residual "
+          f"{clock.residual * 1000:.1f} ms)")
 
 
 def _synth(args: argparse.Namespace) -> None:
@@ -161,6 +221,12 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("-o", "--output", type=Path, required=True, help="HTML page to write")
     report.add_argument("--events", type=Path, default=None,
                         help="events netCDF from 'slipwave detect --netcdf' (phases, slips)")
+    report.add_argument("--kymograph", type=Path, default=None,
+                        help="kymograph netCDF from 'slipwave kymograph'")
+    report.add_argument("--waves", type=Path, default=None, help="waves CSV of 'slipwave waves'")
+    report.add_argument("--clock", type=Path, default=None, help="clock JSON of 'slipwave waves'")
+    report.add_argument("--frames", type=Path, default=None,
+                        help="the video (or image folder) for frames around the first gross slip")
     report.set_defaults(run=_report)
 
     sim = commands.add_parser(
@@ -237,6 +303,39 @@ def build_parser() -> argparse.ArgumentParser:
                            help="events netCDF files from 'slipwave detect --netcdf'")
     summarize.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
     summarize.set_defaults(run=_summarize)
+
+    kymo = commands.add_parser(
+        "kymograph", help="kymograph of the band above the interface, from a video",
+        description="Stream the frames of a video, image folder or TIFF stack, find (or "
+        "take) the contact, and write the band's intensity, fringe activity and frame-to-"
+        "frame change along the contact as netCDF.",
+    )
+    kymo.add_argument("frames", type=Path, help="video file, image folder or TIFF stack")
+    kymo.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
+    kymo.add_argument("--length", type=float, default=80.0, help="contact length, mm (80)")
+    kymo.add_argument("--band", type=float, nargs=2, default=[0.5, 2.0], metavar=("LOW", "HIGH"),
+                      help="band above the interface, mm (0.5 2.0)")
+    kymo.add_argument("--geometry", type=float, nargs=3, default=None,
+                      metavar=("ROW", "LEFT", "RIGHT"),
+                      help="interface row and the contact's end columns, px (found if not "
+                      "given)")
+    kymo.add_argument("--fps", type=float, default=None,
+                      help="frame rate of sources without timestamps")
+    kymo.add_argument("--keep-partial", action="store_true",
+                      help="on a damaged video, keep the frames before the damage")
+    kymo.set_defaults(run=_kymograph)
+
+    waves = commands.add_parser(
+        "waves", help="track the waves of a kymograph, align the clocks, pair with events",
+    )
+    waves.add_argument("kymograph", type=Path, help="netCDF from 'slipwave kymograph'")
+    waves.add_argument("--recording", type=Path, required=True, help="recording netCDF")
+    waves.add_argument("--events", type=Path, required=True, help="events netCDF")
+    waves.add_argument("-o", "--output", type=Path, required=True, help="waves CSV to write")
+    waves.add_argument("--fused", type=Path, required=True,
+                       help="CSV of the events with their waves to write")
+    waves.add_argument("--clock", type=Path, required=True, help="clock fit JSON to write")
+    waves.set_defaults(run=_waves)
 
     synth = commands.add_parser(
         "synth", help="write three saw-tooth CSVs from a signal model (fixtures, demos)",

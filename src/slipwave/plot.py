@@ -10,6 +10,7 @@ matplotlib.use("Agg")  # the workflow runs without a display
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 import seaborn as sns
 import xarray as xr
 from matplotlib.colors import ListedColormap
@@ -135,4 +136,48 @@ def plot_zones(simulation: xr.Dataset, *, vertical: str = "T") -> Figure:
     attrs = simulation.attrs
     ax.set_title(f"H = {attrs.get('slab_height', '?')} mm, fs = {attrs.get('friction_fs', '?')}, "
                  f"fd = {attrs.get('friction_fd', '?')}", fontsize=10)
+    return fig
+
+
+def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
+                   window: tuple[float, float] | None = None) -> Figure:
+    """The band's change along the contact against camera time, tracked fronts on it.
+
+    Each wave is drawn as its front's straight path (from ``x_start`` at
+    ``t_start`` to ``x_end`` at ``t_end``) with its direction's colour.
+    ``window`` limits the time shown (s, camera time).
+    """
+    from slipwave.video.waves import change
+
+    moved = change(kymo)
+    if window is not None:
+        moved = moved.sel(time=slice(*window))
+    time, x = moved["time"].values, moved["x"].values
+    fig, ax = plt.subplots(figsize=(9.0, 3.4), layout="constrained")
+    ax.imshow(moved.values.T, aspect="auto", origin="lower", cmap="magma",
+              extent=(time[0], time[-1], x[0], x[-1]), vmin=0.0,
+              vmax=float(np.percentile(moved.values, 99.9)) or 1.0, interpolation="nearest")
+    if waves is not None:
+        colours = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581"}
+        for _, wave in waves.iterrows():
+            if window is None or window[0] <= wave["t_start"] <= window[1]:
+                ax.plot([wave["t_start"], wave["t_end"]], [wave["x_start"], wave["x_end"]],
+                        color=colours[wave["direction"]], lw=1.2)
+        ax.legend(handles=[Patch(color=c, label=d.replace("_", " ")) for d, c in colours.items()],
+                  fontsize=7, loc="upper right")
+    ax.set_xlabel("camera time [s]")
+    ax.set_ylabel("x along the contact [mm]")
+    ax.set_title("change of the band above the interface since the previous frame, and the "
+                 "tracked fronts", fontsize=9, loc="left")
+    return fig
+
+
+def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
+    """A row of frames with their times."""
+    fig, axes = plt.subplots(1, len(images), figsize=(2.2 * len(images), 1.6),
+                             layout="constrained", squeeze=False)
+    for ax, image, time in zip(axes[0], images, times, strict=True):
+        ax.imshow(image, cmap="gray", vmin=0, vmax=np.iinfo(image.dtype).max)
+        ax.set_title(f"{time:.2f} s", fontsize=8)
+        ax.axis("off")
     return fig

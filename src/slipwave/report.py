@@ -9,6 +9,7 @@ from typing import Any
 
 import jinja2
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from slipwave import __version__
@@ -64,12 +65,66 @@ def event_summary(events: xr.Dataset) -> dict[str, Any]:
     }
 
 
-def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None) -> str:
+def video_summary(
+    kymo: xr.Dataset,
+    waves: pd.DataFrame,
+    clock: dict[str, Any],
+    frames: str | PathLike[str] | None = None,
+    events: xr.Dataset | None = None,
+) -> dict[str, Any]:
+    """The page's video section: kymograph with fronts, frames around the first gross slip.
+
+    ``clock`` is the fit ``slipwave waves`` writes (``offset_s``, ``rate``...).
+    """
+    from slipwave.plot import plot_frames, plot_kymograph
+    from slipwave.video import open_frames
+
+    def camera(card_time: float) -> float:
+        return (card_time - float(clock["offset_s"])) / float(clock["rate"])
+
+    figures = [figure_png(plot_kymograph(kymo, waves))]
+    gross = None
+    if events is not None:
+        kinds = events["kind"].values.astype(str)
+        if (kinds == "gross_slip").any():
+            gross = float(events["t_start"].values[np.argmax(kinds == "gross_slip")])
+    strip = None
+    if gross is not None:
+        start = camera(gross)
+        figures.append(figure_png(plot_kymograph(kymo, waves, window=(start - 1.0, start + 1.5))))
+        if frames is not None:
+            wanted = start + np.arange(-1, 7) * 0.08
+            images: list[np.ndarray] = []
+            times: list[float] = []
+            for frame in open_frames(frames):
+                if len(images) < wanted.size and frame.time >= wanted[len(images)] - 1e-6:
+                    images.append(frame.image)
+                    times.append(frame.time)
+                if len(images) == wanted.size:
+                    break
+            if images:
+                strip = base64.b64encode(figure_png(plot_frames(images, times))).decode("ascii")
+    directions = waves["direction"].value_counts().to_dict() if len(waves) else {}
+    return {
+        "figures": [base64.b64encode(png).decode("ascii") for png in figures],
+        "frames": strip,
+        "waves": len(waves),
+        "directions": directions,
+        "speed": float(waves["speed"].median()) if len(waves) else float("nan"),
+        "clock": clock,
+        "first_gross": gross,
+    }
+
+
+def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
+                     video: dict[str, Any] | None = None) -> str:
     """The HTML page of one test: metadata, warnings, channels and their plot.
 
     With ``events`` (:func:`slipwave.events.events_dataset`) the plot shades
     the phases and marks the slips, and the page lists the events, the wave
-    counts and T/|N| at gross slips. The page is self-contained (the figure is
+    counts and T/|N| at gross slips; with ``video`` (:func:`video_summary`)
+    it shows the kymograph with the tracked fronts and frames around the
+    first gross slip. The page is self-contained (the figure is
     embedded), so it can be mailed or archived on its own.
     """
     png = figure_png(plot_recording(recording, events))
@@ -91,14 +146,16 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None) ->
         duration=float(time[-1] - time[0]) if time.size else 0.0,
         figure=base64.b64encode(png).decode("ascii"),
         events=None if events is None else event_summary(events),
+        video=video,
         version=__version__,
     )
 
 
 def write_test_page(
-    recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None
+    recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None,
+    video: dict[str, Any] | None = None,
 ) -> Path:
     """Write :func:`render_test_page` to ``path``, whole or not at all."""
     with atomic_output(path) as temporary:
-        temporary.write_text(render_test_page(recording, events), encoding="utf-8")
+        temporary.write_text(render_test_page(recording, events, video), encoding="utf-8")
     return Path(path)

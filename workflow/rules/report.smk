@@ -1,8 +1,7 @@
 rule test_page:
-    """The HTML page of one test: channels and T/|N| against time, phases and slips."""
+    """The HTML page of one test: channels, phases and slips; kymograph and frames if filmed."""
     input:
-        recording="results/{test_id}/recording.nc",
-        events="results/{test_id}/events.nc",
+        unpack(page_inputs),
     output:
         report(
             "reports/{test_id}.html",
@@ -12,8 +11,10 @@ rule test_page:
         ),
     log:
         "results/logs/test_page/{test_id}.log",
+    params:
+        video=video_options,
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave report {input.recording:q} --events {input.events:q} -o {output:q} "
-        "> {log:q} 2>&1"
+        "slipwave report {input.recording:q} --events {input.events:q} {params.video} "
+        "-o {output:q} > {log:q} 2>&1"

@@ -24,8 +24,11 @@ LED_PATCH = (slice(2, 10), slice(2, 10))
 
 
 class _Rows:
-    """Rows of float32 appended one at a time, kept in blocks: no per-row objects, and
-    :meth:`stack` frees each block as it copies it (peak: the result and one block)."""
+    """Rows of float32 appended one at a time, kept in blocks.
+
+    No object per row, and :meth:`stack` frees each block as it copies it (peak:
+    the result and one block).
+    """
 
     BLOCK = 1024
 

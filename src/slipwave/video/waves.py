@@ -275,8 +275,8 @@ def fuse(events: pd.DataFrame, waves: pd.DataFrame, clock: ClockFit, *,
         if gap.size and gap.min() <= tolerance:
             chosen[k] = int(np.argmin(gap))
             taken[chosen[k]] = True
-    described = waves.assign(t_start=starts,
-                             t_end=clock.acquisition_time(waves["t_end"].to_numpy(dtype=float)))
+    described = waves[list(WAVE_COLUMNS)].assign(
+        t_start=starts, t_end=clock.acquisition_time(waves["t_end"].to_numpy(dtype=float)))
     columns = {f"wave_{c}": c for c in WAVE_COLUMNS}
     fused = events.reset_index(drop=True).copy()
     for name, column in columns.items():
