@@ -1,10 +1,11 @@
 """Waves tracked on the default campaign's videos against the virtual bench's truth.
 
 The three videos were rendered with three noise seeds (0, 1, 2), the third
-with a camera clock 0.37 s late and 0.05 % fast. A truth wave is expected to
-show when its T drop is visible (the bench's mark) and its front travels at
-least 20 mm (the renderer moves the front from where the first tenth of the
-contact slipped to where the last tenth did).
+with a camera clock 0.37 s late and 0.05 % fast. The renderer sweeps each
+wave's front across its slipped range (``x_min`` to ``x_max``) at the wave
+speed, from the end where the slip began. A truth wave is expected to show
+when its T drop is visible (the bench's mark) and it slipped over at least a
+quarter of the contact (20 mm).
 """
 
 from __future__ import annotations
@@ -46,8 +47,7 @@ def tracked() -> dict[str, tuple[xr.Dataset, pd.DataFrame, pd.DataFrame, dict]]:
 
 def _expected(test_id: str) -> pd.DataFrame:
     truth = pd.read_csv(BENCH / "truth" / f"{test_id}_events.csv")
-    travel = (truth["x_last"] - truth["x_first"]).abs()
-    return truth[truth["visible"] & (travel >= 20.0)]
+    return truth[truth["visible"] & (truth["x_max"] - truth["x_min"] >= 20.0)]
 
 
 def _pairs(test_id, tracked):
@@ -65,14 +65,14 @@ def _pairs(test_id, tracked):
 def test_every_travelling_wave_is_found_with_its_direction(test_id, tracked):
     waves, truth, missed = _pairs(test_id, tracked)
     assert list(waves.columns) == list(WAVE_COLUMNS)
-    assert missed.empty, missed[["t_start", "kind", "x_first", "x_last"]]
+    assert missed.empty, missed[["t_start", "kind", "x_min", "x_max"]]
     assert (waves["direction"].to_numpy() == truth["direction"].to_numpy()).all()
 
 
 @pytest.mark.parametrize("test_id", TESTS)
 def test_front_speed_within_ten_percent(test_id, tracked):
     waves, truth, _ = _pairs(test_id, tracked)
-    speed = (truth["x_last"] - truth["x_first"]).abs() / (truth["t_end"] - truth["t_start"])
+    speed = (truth["x_max"] - truth["x_min"]) / (truth["t_end"] - truth["t_start"])
     long = waves["frames"].to_numpy() >= 5
     assert long.sum() >= 20
     error = np.abs(waves["speed"].to_numpy()[long] / speed.to_numpy()[long] - 1)
@@ -101,3 +101,18 @@ def test_fused_events_keep_every_event_and_wave(tracked):
     both = fused[fused["source"] == "both"]
     assert len(both) == len(events)  # every T drop of hl050 has its wave
     assert (np.abs(both["wave_t_start"] - both["t_start"]) < 0.1).all()
+
+
+@pytest.mark.parametrize(("test_id", "share"), [("hl050", 0.9), ("hl025", 0.9), ("hl075", 0.4)])
+def test_swept_extent(test_id, share, tracked):
+    """Within 5 % of the contact length for most waves of the lower slabs.
+
+    On the tall slab (H/L = 0.75, 2.2 px/mm, a band three pixels high) the
+    front fades where partial slips end and the stress field reaches past the
+    slip's tip: there only a minority is within 5 % (median error 5.7 %).
+    """
+    waves, truth, _ = _pairs(test_id, tracked)
+    error = np.abs((waves["x_max"] - waves["x_min"]).to_numpy()
+                   - (truth["x_max"] - truth["x_min"]).to_numpy()) / 80.0
+    assert (error <= 0.05).mean() >= share
+    assert np.median(error) <= 0.06

@@ -245,11 +245,18 @@ def _render(result: BenchResult) -> Iterator[np.ndarray]:
             slipped = order[k] >= 0
             first = x[slipped & (order[k] <= np.quantile(order[k][slipped], 0.1))].mean()
             last = x[slipped & (order[k] >= np.quantile(order[k][slipped], 0.9))].mean()
-            front = first + (last - first) * down
+            # The front sweeps the slipped range at the wave speed, from the end where
+            # the slip began (the first tenth of the cascade) to the other.
+            low, high = x[slipped].min(), x[slipped].max()
+            start, stop = (high, low) if last < first else (low, high)
+            front = start + (stop - start) * down
             # Pixels the front has passed show the state after the wave, across a
-            # smooth band of FRONT_WIDTH mm.
-            passed = (camera.pixel_x - front) * np.sign(first - last) / FRONT_WIDTH + 0.5
-            weight = np.clip(passed, 0.0, 1.0)
+            # smooth band of FRONT_WIDTH mm; outside the slipped range the slab
+            # relaxes gradually over the wave, without a front.
+            passed = (camera.pixel_x - front) * np.sign(start - stop) / FRONT_WIDTH + 0.5
+            swept = (camera.pixel_x >= low - FRONT_WIDTH / 2) & (
+                camera.pixel_x <= high + FRONT_WIDTH / 2)
+            weight = np.where(swept, np.clip(passed, 0.0, 1.0), down)
             field = field + (stress(k, "final") - field) * weight
         led = spec.sync_time <= t < spec.sync_time + LED_DURATION
         yield camera.render(field, rng, led=bool(led))
