@@ -16,7 +16,7 @@ import pandas as pd
 import xarray as xr
 
 from slipwave.errors import SlipwaveError
-from slipwave.events.steps import _level, edge_jumps, load_drops
+from slipwave.events.steps import edge_jumps, load_drops, window_median
 
 EVENT_COLUMNS = (
     "kind", "i_start", "t_start", "i_end", "t_end", "duration", "T_before", "T_after",
@@ -231,8 +231,9 @@ def detect_events(
     ends = events["i_end"].to_numpy(dtype=np.int64)
     # levels over windows as long as the event (at least 5 samples), clear of it
     width = np.maximum(ends - starts, 5)
-    n_before = np.array([_level(normal, s - w, s + 1) for s, w in zip(starts, width, strict=True)])
-    n_after = np.array([_level(normal, e, e + w) for e, w in zip(ends, width, strict=True)])
+    n_before = np.array([window_median(normal, s - w, s + 1)
+                         for s, w in zip(starts, width, strict=True)])
+    n_after = np.array([window_median(normal, e, e + w) for e, w in zip(ends, width, strict=True)])
     result = pd.DataFrame({
         "kind": events["kind"],
         "i_start": starts,

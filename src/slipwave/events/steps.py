@@ -398,7 +398,6 @@ def _prepare(time: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 def _falls(
-    time: np.ndarray,
     values: np.ndarray,
     smooth: np.ndarray,
     *,
@@ -511,13 +510,13 @@ def load_drops(
     """
     time, values, sigma, interval = _prepare(time, load)
     size = threshold * sigma if min_drop is None else float(min_drop)
-    falls = _falls(time, values, despike(values, max_spike), size=size, max_spike=max_spike,
+    falls = _falls(values, despike(values, max_spike), size=size, max_spike=max_spike,
                    longest=_longest(values, max_duration, interval),
                    min_asymmetry=min_asymmetry)
     return _step_table(time, falls, noise=sigma, min_size=size, sample_interval=interval)
 
 
-def _level(values: np.ndarray, first: int, last: int) -> float:
+def window_median(values: np.ndarray, first: int, last: int) -> float:
     """Median of ``values[first:last]`` (clipped to the signal), NaN if empty.
 
     Long windows are thinned to about 1000 evenly spaced samples.
@@ -535,8 +534,8 @@ def _changes_at(time: np.ndarray, values: np.ndarray, drops: pd.DataFrame, *, si
     for start, end in zip(drops["i_start"].to_numpy(dtype=np.int64),
                           drops["i_end"].to_numpy(dtype=np.int64), strict=True):
         width = max(int(end - start), 5)  # levels over windows as long as the event
-        before = _level(values, start - width, start + 1)
-        after = _level(values, end, end + width)
+        before = window_median(values, start - width, start + 1)
+        after = window_median(values, end, end + width)
         jump = after - before
         # when the signal had made half its change: which edge moved first
         low = max(start - width, 0)
@@ -615,7 +614,7 @@ def edge_jumps(
     for sign in (1.0, -1.0):  # falls of the signal, then of its opposite (rises)
         if sign < 0:
             values, smooth = -values, -smooth
-        falls = _falls(time, values, smooth, size=size, max_spike=max_spike,
+        falls = _falls(values, smooth, size=size, max_spike=max_spike,
                        longest=_longest(values, max_duration, interval),
                        min_asymmetry=min_asymmetry)
         found = _step_table(time, falls)
