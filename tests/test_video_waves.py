@@ -3,9 +3,12 @@
 The three videos were rendered with three noise seeds (0, 1, 2), the third
 with a camera clock 0.37 s late and 0.05 % fast. The renderer sweeps each
 wave's front across its slipped range (``x_min`` to ``x_max``) at the wave
-speed, from the end where the slip began. A truth wave is expected to show
-when its T drop is visible (the bench's mark) and it slipped over at least a
-quarter of the contact (20 mm).
+speed, from the end where the slip began. A truth wave is expected in the video
+when the bench marks it ``camera_visible`` (it changes the band by at least 5
+noise sigmas and its front shows in at least 3 frames) and it slipped over at
+least a quarter of the contact (``track_waves``' ``min_extent``); the video's
+waves are those it could follow (not ``unresolved``) after the normal loading
+(the truth lists the tangential phase's waves).
 """
 
 from __future__ import annotations
@@ -40,25 +43,42 @@ def tracked() -> dict[str, tuple[xr.Dataset, pd.DataFrame, pd.DataFrame, dict]]:
         recording = read_acquisition(BENCH / f"{test_id}.csv")
         ratio = float(table.loc[test_id, "gross_edge_ratio"] or 0.9)
         events = detect_events(recording, gross_edge_ratio=ratio)
-        camera = json.loads((BENCH / "truth" / f"{test_id}.json").read_text())["test"]["camera"]
+        spec = json.loads((BENCH / "truth" / f"{test_id}.json").read_text())["test"]
+        camera = {**spec["camera"], "loading_time": spec["loading_time"]}
         out[test_id] = (kymo, recording, events, camera)
     return out
 
 
 def _expected(test_id: str) -> pd.DataFrame:
     truth = pd.read_csv(BENCH / "truth" / f"{test_id}_events.csv")
-    return truth[truth["visible"] & (truth["x_max"] - truth["x_min"] >= 20.0)]
+    return truth[truth["camera_visible"] & (truth["x_max"] - truth["x_min"] >= 20.0)]
+
+
+def _followed(test_id, tracked) -> tuple[pd.DataFrame, np.ndarray]:
+    """The waves followed in the tangential phase, and their starts on the card's clock."""
+    kymo, _, _, camera = tracked[test_id]
+    waves = track_waves(kymo)
+    start = (camera["clock_offset"] + waves["t_start"] * (1 + camera["clock_rate_error"]))
+    keep = (waves["kind"] != "unresolved") & (start >= camera["loading_time"])
+    return waves[keep].reset_index(drop=True), start[keep].to_numpy()
 
 
 def _pairs(test_id, tracked):
-    kymo, _, _, camera = tracked[test_id]
-    waves = track_waves(kymo)
-    start = camera["clock_offset"] + waves["t_start"] * (1 + camera["clock_rate_error"])
+    waves, start = _followed(test_id, tracked)
     truth = _expected(test_id)
-    gap = np.abs(start.to_numpy()[:, None] - truth["t_start"].to_numpy()[None, :])
+    gap = np.abs(start[:, None] - truth["t_start"].to_numpy()[None, :])
     nearest = gap.argmin(axis=0)
     found = gap[nearest, np.arange(truth.shape[0])] <= MATCH
     return waves.iloc[nearest[found]].reset_index(drop=True), truth[found], truth[~found]
+
+
+@pytest.mark.parametrize("test_id", TESTS)
+def test_wave_count_equals_the_truth(test_id, tracked):
+    waves, _ = _followed(test_id, tracked)
+    paired, _, missed = _pairs(test_id, tracked)
+    assert missed.empty, missed[["t_start", "kind", "x_min", "x_max"]]
+    assert len(waves) == len(_expected(test_id)) == len(paired)
+    assert len(waves) >= 30
 
 
 @pytest.mark.parametrize("test_id", TESTS)
@@ -103,16 +123,28 @@ def test_fused_events_keep_every_event_and_wave(tracked):
     assert (np.abs(both["wave_t_start"] - both["t_start"]) < 0.1).all()
 
 
-@pytest.mark.parametrize(("test_id", "share"), [("hl050", 0.9), ("hl025", 0.9), ("hl075", 0.4)])
-def test_swept_extent(test_id, share, tracked):
-    """Within 5 % of the contact length for most waves of the lower slabs.
+@pytest.mark.parametrize(("test_id", "share", "worst"),
+                         [("hl050", 1.0, 0.05), ("hl025", 1.0, 0.05), ("hl075", 0.95, 0.055)])
+def test_swept_extent_within_five_percent(test_id, share, worst, tracked):
+    """Within 5 % of the contact length (80 mm).
 
-    On the tall slab (H/L = 0.75, 2.2 px/mm, a band three pixels high) the
-    front fades where partial slips end and the stress field reaches past the
-    slip's tip: there only a minority is within 5 % (median error 5.7 %).
+    On the tall slab (H/L = 0.75, 2.2 px/mm, a band three pixels high) two of
+    its 50 waves are 5.1 and 5.2 % off: the front's 4 mm blend reaches 2 mm past
+    the slipped range where the wave starts.
     """
     waves, truth, _ = _pairs(test_id, tracked)
     error = np.abs((waves["x_max"] - waves["x_min"]).to_numpy()
                    - (truth["x_max"] - truth["x_min"]).to_numpy()) / 80.0
     assert (error <= 0.05).mean() >= share
-    assert np.median(error) <= 0.06
+    assert error.max() <= worst
+    assert np.median(error) <= 0.03
+
+
+def test_fast_changes_are_unresolved_not_waves(tracked):
+    """hl050's 5-14 mm slips last one or two frames: listed, without direction or extent."""
+    kymo, _, _, _ = tracked["hl050"]
+    waves = track_waves(kymo)
+    fast = waves[waves["kind"] == "unresolved"]
+    assert len(fast) >= 10
+    assert (fast["direction"] == "unresolved").all() and fast["speed"].isna().all()
+    assert (fast["frames"] <= 3).all()

@@ -144,8 +144,9 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
     """The band's change along the contact against camera time, tracked fronts on it.
 
     Each wave is drawn as its front's straight path (from ``x_start`` at
-    ``t_start`` to ``x_end`` at ``t_end``) with its direction's colour.
-    ``window`` limits the time shown (s, camera time).
+    ``t_start`` to ``x_end`` at ``t_end``) with its direction's colour; a
+    change too fast to follow (``unresolved``) as a grey bar over the range it
+    changed. ``window`` limits the time shown (s, camera time).
     """
     from slipwave.video.waves import change
 
@@ -158,9 +159,15 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
               extent=(time[0], time[-1], x[0], x[-1]), vmin=0.0,
               vmax=float(np.percentile(moved.values, 99.9)) or 1.0, interpolation="nearest")
     if waves is not None:
-        colours = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581"}
+        colours = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581",
+                   "unresolved": "#9e9e9e"}
         for _, wave in waves.iterrows():
-            if window is None or window[0] <= wave["t_start"] <= window[1]:
+            if window is not None and not window[0] <= wave["t_start"] <= window[1]:
+                continue
+            if wave["direction"] == "unresolved":
+                ax.plot([wave["t_start"]] * 2, [wave["x_min"], wave["x_max"]],
+                        color=colours["unresolved"], lw=1.2)
+            else:
                 ax.plot([wave["t_start"], wave["t_end"]], [wave["x_start"], wave["x_end"]],
                         color=colours[wave["direction"]], lw=1.2)
         ax.legend(handles=[Patch(color=c, label=d.replace("_", " ")) for d, c in colours.items()],

@@ -104,13 +104,14 @@ def video_summary(
                     break
             if images:
                 strip = base64.b64encode(figure_png(plot_frames(images, times))).decode("ascii")
-    directions = waves["direction"].value_counts().to_dict() if len(waves) else {}
+    resolved = waves[waves["kind"] != "unresolved"]
     return {
         "figures": [base64.b64encode(png).decode("ascii") for png in figures],
         "frames": strip,
-        "waves": len(waves),
-        "directions": directions,
-        "speed": float(waves["speed"].median()) if len(waves) else float("nan"),
+        "waves": len(resolved),
+        "unresolved": len(waves) - len(resolved),
+        "directions": resolved["direction"].value_counts().to_dict(),
+        "speed": float(resolved["speed"].median()) if len(resolved) else float("nan"),
         "clock": clock,
         "first_gross": gross,
     }

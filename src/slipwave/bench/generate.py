@@ -37,6 +37,8 @@ from slipwave.solver import Coulomb, LoadPath, Slab, simulate
 
 LED_DURATION = 0.2  # s the sync LED stays lit
 FRONT_WIDTH = 4.0  # mm over which a wave front blends the states before and after it
+CAMERA_SNR = 5.0  # a wave the camera sees changes the band by 5 noise sigmas on average
+CAMERA_FRAMES = 3  # and its front shows in at least 3 frames
 
 
 @dataclass(frozen=True)
@@ -143,6 +145,8 @@ def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
     camera_end = (spec.duration - spec.camera.clock_offset) / (1 + spec.camera.clock_rate_error)
     frame_times = np.arange(0.0, camera_end, 1.0 / spec.camera.fps)
     frame_times = frame_times[spec.camera.acquisition_time(frame_times) >= 0.0]
+    if not events.empty:
+        events = _camera_truth(spec, simulation, events, frame_times)
     return BenchResult(spec, simulation, recording, events, phases, frame_times, seed)
 
 
@@ -194,6 +198,49 @@ def _events(spec: BenchTest, simulation: xr.Dataset) -> pd.DataFrame:
         return events
     events["visible"] = (events["kind"] == "gross_slip") | (events["drop"] >= spec.min_event_drop)
     events.insert(0, "test_id", spec.test_id)
+    return events
+
+
+def _camera_truth(spec: BenchTest, simulation: xr.Dataset, events: pd.DataFrame,
+                  frame_times: np.ndarray) -> pd.DataFrame:
+    """What the camera can see of each wave: its image change, frames and visibility.
+
+    ``camera_change`` is the mean absolute change of the noise-free fringe
+    intensity (8-bit grey levels) that the wave makes in the band 0.5 to 2 mm
+    above the interface, over its slipped range; ``camera_frames`` the number of
+    frames taken while it runs. A wave is ``camera_visible`` when its change is
+    at least ``CAMERA_SNR`` times the sensor noise and its front shows in at
+    least ``CAMERA_FRAMES`` frames (fewer, and neither its direction nor its
+    extent can be measured). Without a video, none is.
+    """
+    events = events.copy()
+    if spec.video == "none":
+        events["camera_change"] = np.nan
+        events["camera_frames"] = 0
+        events["camera_visible"] = False
+        return events
+    camera = Photoelastic(spec.slab(), spec.camera)
+    rows = np.nonzero(camera.inside)[0]
+    height = (camera.interface_row - (rows + 0.5)) / camera.scale
+    band = (height >= 0.5) & (height <= 2.0)
+    x = camera.pixel_x[band]
+    changes = []
+    for step, low, high in zip(events["step"], events["x_min"], events["x_max"], strict=True):
+        before = np.concatenate([simulation["ux_before_wave"].values[step],
+                                 simulation["uy_before_wave"].values[step]])
+        after = np.concatenate([simulation["ux"].values[step], simulation["uy"].values[step]])
+        shown = [np.sin(np.pi * camera.fringe_order(camera.stress(u)[:, band])) ** 2
+                 for u in (before, after)]
+        swept = (x >= low) & (x <= high)
+        difference = np.abs(shown[1] - shown[0])[swept] * spec.camera.intensity
+        changes.append(float(difference.mean()) if swept.any() else 0.0)
+    acquisition = spec.camera.acquisition_time(frame_times)
+    frames = (np.searchsorted(acquisition, events["t_end"], side="right")
+              - np.searchsorted(acquisition, events["t_start"], side="right"))
+    events["camera_change"] = changes
+    events["camera_frames"] = frames
+    events["camera_visible"] = (np.asarray(changes) >= CAMERA_SNR * spec.camera.noise) & (
+        frames >= CAMERA_FRAMES)
     return events
 
 
