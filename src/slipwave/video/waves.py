@@ -150,11 +150,9 @@ def track_waves(
             if time[group[-1]] - time[group[0]] > max_duration:
                 continue  # not a wave: the normal loading, or sliding
             window = np.arange(max(group[0] - 1, 1), min(group[-1] + 2 + max_gap, time.size))
-            # above the position's sticking level, and above what it was doing just
-            # before (the band keeps changing while the load still ramps up fast)
-            before = moved[max(window[0] - 10, 1) : window[0]]
-            usual = np.maximum(quiet, before.max(axis=0)) if before.size else quiet
-            excess = np.maximum(moved[window] - usual, 0.0)
+            excess = np.maximum(moved[window] - quiet, 0.0)
+            # 2 mm arriving too early in a row (half a front's width on the bench's
+            # images) end the front; a lone early position does not
             found = sweep(excess, floor=floor * level,
                           hole=round(max_hole / pitch), stop=round(2.0 / pitch))
             if found is None:
@@ -264,7 +262,7 @@ def _follow(arrival: np.ndarray, origin: int, way: int, hole: int, stop: int,
 
 
 def _front_speed(positions: np.ndarray, arrival: np.ndarray) -> float:
-    """Front velocity (mm/s, signed): positions against their arrival times (s).
+    """Front speed (mm/s): slope of positions against their arrival times (s).
 
     Positions that arrived with the first or last of them (the change there came
     all at once as the wave set off or stopped) are left out when enough
