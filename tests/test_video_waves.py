@@ -123,21 +123,14 @@ def test_fused_events_keep_every_event_and_wave(tracked):
     assert (np.abs(both["wave_t_start"] - both["t_start"]) < 0.1).all()
 
 
-@pytest.mark.parametrize(("test_id", "share", "worst"),
-                         [("hl050", 1.0, 0.05), ("hl025", 1.0, 0.05), ("hl075", 0.95, 0.055)])
-def test_swept_extent_within_five_percent(test_id, share, worst, tracked):
-    """Within 5 % of the contact length (80 mm).
-
-    On the tall slab (H/L = 0.75, 2.2 px/mm, a band three pixels high) two of
-    its 50 waves are 5.1 and 5.2 % off: the front's 4 mm blend reaches 2 mm past
-    the slipped range where the wave starts.
-    """
+@pytest.mark.parametrize("test_id", TESTS)
+def test_swept_extent_within_five_percent(test_id, tracked):
+    """Within 5 % of the contact length (80 mm), every wave."""
     waves, truth, _ = _pairs(test_id, tracked)
     error = np.abs((waves["x_max"] - waves["x_min"]).to_numpy()
                    - (truth["x_max"] - truth["x_min"]).to_numpy()) / 80.0
-    assert (error <= 0.05).mean() >= share
-    assert error.max() <= worst
-    assert np.median(error) <= 0.03
+    assert error.max() <= 0.05, error.max()
+    assert np.median(error) <= 0.025
 
 
 def test_fast_changes_are_unresolved_not_waves(tracked):
@@ -183,6 +176,8 @@ def test_another_seed(another_seed):
     assert (paired["direction"].to_numpy() == truth["direction"].to_numpy()).all()
     error = np.abs((paired["x_max"] - paired["x_min"]).to_numpy()
                    - (truth["x_max"] - truth["x_min"]).to_numpy()) / 80.0
-    assert (error <= 0.05).mean() >= 0.95 and error.max() <= 0.065
+    # one wave in this rendering is 5.1 % off: the front's 4 mm blend on the images
+    # reaches 2 mm past where the partial slip stopped
+    assert (error > 0.05).sum() <= 1 and error.max() <= 0.055
     speed = (truth["x_max"] - truth["x_min"]) / (truth["t_end"] - truth["t_start"])
     assert np.abs(paired["speed"].to_numpy() / speed.to_numpy() - 1).max() <= 0.10

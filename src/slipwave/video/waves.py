@@ -22,6 +22,9 @@ WAVE_COLUMNS = ("t_start", "t_end", "frames", "x_start", "x_end", "x_min", "x_ma
                 "direction", "speed", "extent", "kind")
 """Columns of :func:`track_waves`."""
 
+SMOOTHING = 3
+"""Pixels along the band over which :func:`change` averages."""
+
 
 def change(kymo: xr.Dataset) -> xr.DataArray:
     """How much the band changed since the previous frame, at each frame and position.
@@ -29,7 +32,7 @@ def change(kymo: xr.Dataset) -> xr.DataArray:
     The kymograph's ``motion`` (mean absolute change of the band's pixels),
     smoothed over 3 pixels along the band; the first frame has none (0).
     """
-    smooth = ndimage.uniform_filter1d(kymo["motion"].values.astype(float), 3, axis=1,
+    smooth = ndimage.uniform_filter1d(kymo["motion"].values.astype(float), SMOOTHING, axis=1,
                                       mode="nearest")
     smooth[0] = 0.0
     return xr.DataArray(smooth, coords=kymo["motion"].coords, dims=("time", "x"),
@@ -158,6 +161,11 @@ def track_waves(
             if found is None:
                 continue
             origin, end, arrival = found
+            # the change was smoothed over SMOOTHING positions: it leaks half of that
+            # past each end of the front
+            inward = int(np.sign(end - origin)) * (SMOOTHING // 2)
+            if abs(end - origin) > 2 * abs(inward):
+                origin, end = origin + inward, end - inward
             low, high = sorted((x[origin], x[end]))
             extent = (high - low) / length
             if extent < min_extent:
