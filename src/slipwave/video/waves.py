@@ -118,7 +118,9 @@ def track_waves(
 
     Examples
     --------
-    A front crossing 60 of 80 positions from the right, four positions a frame:
+    A front crossing 60 of 80 positions (1 mm apart) from the right, four
+    positions a frame; its extent runs between the centres of its end pixels
+    (59 mm):
 
     >>> frames, columns = 40, 80
     >>> motion = np.full((frames, columns), 0.002)
@@ -130,7 +132,7 @@ def track_waves(
     ...                   attrs={"geometry_length": 80.0})
     >>> wave = track_waves(kymo).iloc[0]
     >>> wave["direction"], round(wave["speed"]), round(float(wave["extent"]), 2), wave["kind"]
-    ('right_to_left', 100, 0.75, 'partial')
+    ('right_to_left', 100, 0.74, 'partial')
     """
     moved = change(kymo).values
     time = kymo["time"].values.astype(float)
@@ -162,10 +164,8 @@ def track_waves(
                 continue
             origin, end, arrival = found
             # the change was smoothed over SMOOTHING positions: it leaks half of that
-            # past each end of the front
-            inward = int(np.sign(end - origin)) * (SMOOTHING // 2)
-            if abs(end - origin) > 2 * abs(inward):
-                origin, end = origin + inward, end - inward
+            # past each end of the front, unless the end is the contact's
+            origin, end = (_unleak(origin, end, x.size), _unleak(end, origin, x.size))
             low, high = sorted((x[origin], x[end]))
             extent = (high - low) / length
             if extent < min_extent:
@@ -191,6 +191,14 @@ def track_waves(
     table = pd.DataFrame(rows, columns=list(WAVE_COLUMNS))
     table.attrs.update(threshold=limit, frame_period=period, length=length)
     return table
+
+
+def _unleak(tip: int, other: int, size: int) -> int:
+    """Move one end of a front (position index) in by the smoothing's leak."""
+    leak = SMOOTHING // 2
+    if tip in (0, size - 1) or abs(tip - other) <= 2 * leak:
+        return tip
+    return tip + leak if other > tip else tip - leak
 
 
 def arrivals(excess: np.ndarray, floor: float) -> np.ndarray:
