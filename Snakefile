@@ -1,9 +1,12 @@
 # slipwave workflow: friction-bench recordings to answers.
 # Run: snakemake --cores 2            (the default campaign of config/config.yaml)
 #      snakemake --cores 2 --configfile my_campaign.yaml
+#
+# One stage, one name: rule <stage> lives in workflow/rules/<stage>.smk, runs
+# `slipwave <stage>` and its code is the module the README's stage table names.
 from snakemake.utils import min_version, validate
 
-from slipwave.campaign import column_arguments, detection_arguments, read_campaign
+from slipwave.campaign import check_campaign, column_pairs, gross_edge_ratio, read_campaign
 
 min_version("8.10")
 
@@ -11,16 +14,14 @@ min_version("8.10")
 configfile: "config/config.yaml"
 
 
+# The schema carries every default: validate() fills them into config.
 validate(config, "workflow/schemas/config.schema.json")
-tests = read_campaign(config["tests"])
-validate(tests, "workflow/schemas/tests.schema.json")
-for name in tests["columns"]:
-    column_arguments(config, name)  # an unknown column-map name fails here, before any job
-for ratio in tests["gross_edge_ratio"]:
-    detection_arguments(config, ratio)  # so does a bad detection setting
+campaign = read_campaign(config["tests"])
+validate(campaign, "workflow/schemas/tests.schema.json")
+check_campaign(config, campaign)
 
-TEST_IDS = list(tests["test_id"])
-FILMED_IDS = [test_id for test_id in TEST_IDS if tests.loc[test_id, "frames"]]
+TEST_IDS = list(campaign["test_id"])
+FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
 
 
 wildcard_constraints:
@@ -30,7 +31,9 @@ wildcard_constraints:
 include: "workflow/rules/common.smk"
 include: "workflow/rules/ingest.smk"
 include: "workflow/rules/detect.smk"
-include: "workflow/rules/video.smk"
+include: "workflow/rules/summary.smk"
+include: "workflow/rules/kymograph.smk"
+include: "workflow/rules/waves.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -21,7 +21,7 @@ import numpy as np
 import scipy.io
 
 from slipwave.bench.generate import BenchTest, simulate_test
-from slipwave.bench.signals import DEFAULT_SENSORS, apply_sensors, clean_signals
+from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors, clean_signals
 from slipwave.events import detect_events, load_drops
 
 SAMPLES = 10_000_000

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
 from slipwave.io import read_acquisition, write_acquisition
-from slipwave.synthetic import SawtoothBench, sawtooth_recording
 
 TARGET_ROWS_PER_S = 1e6
 

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from slipwave.bench import DEFAULT_SENSORS, Sensor, apply_sensors, clean_signals
-from slipwave.bench.signals import step_times, wave_durations
+from slipwave.bench.sensors import step_times, wave_durations
 from slipwave.errors import SlipwaveError
 from slipwave.io import read_acquisition, write_acquisition
 from slipwave.solver import Coulomb, LoadPath, Slab, simulate

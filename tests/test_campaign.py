@@ -2,7 +2,13 @@ from __future__ import annotations
 
 import pytest
 
-from slipwave.campaign import column_arguments, column_map, read_campaign
+from slipwave.campaign import (
+    check_campaign,
+    column_map,
+    column_pairs,
+    gross_edge_ratio,
+    read_campaign,
+)
 from slipwave.errors import ConfigError
 
 
@@ -32,6 +38,21 @@ def test_column_maps():
     config = {"column_maps": {"fr": {"Temps": "time", "Effort x": "T"}}}
     assert column_map(config, "fr") == {"Temps": "time", "Effort x": "T"}
     assert column_map(config, "") == {}
-    assert column_arguments(config, "fr") == "--column=Temps=time '--column=Effort x=T'"
+    assert column_pairs(config, "fr") == ["Temps=time", "Effort x=T"]
     with pytest.raises(ConfigError, match=r"column map 'de' is not in the config's column_maps"):
         column_map(config, "de")
+
+
+def test_gross_edge_ratio_per_test_wins():
+    config = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {}}
+    assert gross_edge_ratio(config, {"test_id": "a", "gross_edge_ratio": ""}) == 0.9
+    assert gross_edge_ratio(config, {"test_id": "a", "gross_edge_ratio": "1.3"}) == 1.3
+    with pytest.raises(ConfigError, match=r"test 'a': gross_edge_ratio '-1' must be positive"):
+        gross_edge_ratio(config, {"test_id": "a", "gross_edge_ratio": "-1"})
+
+
+def test_check_campaign_names_the_test_with_an_unknown_map(write):
+    table = read_campaign(write("test_id\tcsv\tcolumns\na\tx.csv\nb\ty.csv\tde\n", "t.tsv"))
+    config = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {"fr": {"Temps": "time"}}}
+    with pytest.raises(ConfigError, match=r"test 'b': column map 'de' is not in the config"):
+        check_campaign(config, table)

@@ -18,8 +18,8 @@ def test_ingest_writes_netcdf(write, tmp_path, capsys):
 def test_ingest_column_options(write, tmp_path):
     path = write("Horloge (ms);Cis (N);Serrage (N)\n0;1;-2\n10;2;-3\n")
     out = tmp_path / "rec.nc"
-    code = main(["ingest", str(path), "-o", str(out), "--column", "Horloge=time",
-                 "--column", "Cis=T", "--column=Serrage=N"])
+    code = main(["ingest", str(path), "-o", str(out), "--columns", "Horloge=time",
+                 "Cis=T", "Serrage=N"])
     assert code == 0
     np.testing.assert_allclose(read_dataset(out)["time"].values, [0.0, 0.01])
 
@@ -48,7 +48,7 @@ def test_report_page(write, tmp_path):
     assert "tangential load" in html and "normal_load_n" in html
 
 
-def test_synth_writes_three_tests(tmp_path):
-    assert main(["synth", str(tmp_path), "--seed", "4"]) == 0
+def test_sawtooth_writes_three_tests(tmp_path):
+    assert main(["sawtooth", str(tmp_path), "--seed", "4"]) == 0
     assert sorted(p.name for p in tmp_path.glob("*.csv")) == [
         "saw_hl025.csv", "saw_hl050.csv", "saw_hl075.csv"]

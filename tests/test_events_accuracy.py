@@ -22,7 +22,7 @@ import pytest
 import yaml
 
 from slipwave.bench.generate import BenchResult, load_tests, simulate_test
-from slipwave.bench.signals import DEFAULT_SENSORS, apply_sensors, clean_signals
+from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors, clean_signals
 from slipwave.campaign import read_campaign
 from slipwave.events import detect_events
 from slipwave.io import read_acquisition, write_acquisition

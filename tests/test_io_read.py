@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
 from slipwave.io import read_acquisition, read_dataset, write_acquisition, write_dataset
-from slipwave.synthetic import SawtoothBench, sawtooth_recording
 
 from conftest import CANONICAL
 

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
+from slipwave.cache import DiskCache
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.io import read_dataset
@@ -14,22 +17,35 @@ from slipwave.solver import contact as contact_module
 from slipwave.solver import slab as slab_module
 
 
-def test_condensed_matrices_cached_in_memory_and_on_disk(tmp_path, monkeypatch):
-    monkeypatch.setenv("SLIPWAVE_CACHE_DIR", str(tmp_path))
-    slab_module._condensed_unit.cache_clear()
+def test_condensed_matrices_cached_in_memory_and_in_a_store(tmp_path, monkeypatch):
+    store = DiskCache(tmp_path)
+    slab_module.forget_condensed()
+    built = []
+    assemble = slab_module.assemble_condensed
+    monkeypatch.setattr(slab_module, "assemble_condensed",
+                        lambda slab: built.append(slab) or assemble(slab))
     slab = Slab(height=30.0, elements=40)
-    first = slab_module.condense(slab)
-    files = list(tmp_path.glob("condensed-*.npz"))
-    assert len(files) == 1
-    assert slab_module._condensed_unit.cache_info().misses == 1
-    slab_module.condense(Slab(height=30.0, elements=40, youngs_modulus=14.0))
-    assert slab_module._condensed_unit.cache_info().hits == 1  # E does not rebuild
-    slab_module._condensed_unit.cache_clear()
+    first = slab_module.condense(slab, store=store)
+    assert len(list(tmp_path.glob("condensed-*.npz"))) == 1
+    slab_module.condense(Slab(height=30.0, elements=40, youngs_modulus=14.0), store=store)
+    assert len(built) == 1  # E does not rebuild
+    slab_module.forget_condensed()
     monkeypatch.setattr(slab_module, "assemble_condensed", lambda *a, **k: pytest.fail("rebuilt"))
-    again = slab_module.condense(slab)
+    again = slab_module.condense(slab, store=store)  # from the store, not rebuilt
     np.testing.assert_array_equal(again.stiffness, first.stiffness)
     doubled = slab_module.condense(Slab(height=30.0, elements=40, youngs_modulus=14.0))
     np.testing.assert_allclose(doubled.stiffness, 2 * first.stiffness)
+
+
+def test_damaged_store_file_is_rebuilt(tmp_path):
+    store = DiskCache(tmp_path)
+    slab = Slab(height=30.0, elements=20)
+    key = slab_module.geometry_key(dataclasses.replace(slab, youngs_modulus=1.0, width=1.0))
+    (tmp_path / f"condensed-{key}.npz").write_bytes(b"not an npz")
+    assert store.load(key) is None
+    slab_module.forget_condensed()
+    condensed = slab_module.condense(slab, store=store)
+    np.testing.assert_allclose(store.load(key).stiffness, condensed.stiffness / 7.0, rtol=1e-12)
 
 
 def test_condensed_stiffness_is_symmetric_positive():

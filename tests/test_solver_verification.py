@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from slipwave.io import read_dataset, write_dataset
-from slipwave.solver import Coulomb, LoadPath, Slab, classify, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, describe_behaviour, simulate
 from slipwave.solver.contact import SLIP, STICK, Body, Control
 from slipwave.solver.simulate import RESIDUAL_TOLERANCE
 from slipwave.solver.slab import condense
@@ -149,7 +149,7 @@ def test_large_friction_sticks_during_normal_loading(bench_case):
 
 def test_small_friction_slips_at_the_edges():
     ds = simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath())
-    behaviour = classify(ds)
+    behaviour = describe_behaviour(ds)
     assert behaviour.after_normal == "edge_slip"
     left, right = behaviour.edge_slip_extent
     assert left == right > 0
@@ -181,7 +181,7 @@ def test_residual_grid(hl, f):
 
 
 def test_bench_configuration_is_zd(bench_case):
-    behaviour = classify(bench_case)
+    behaviour = describe_behaviour(bench_case)
     assert behaviour.first_opening == "right"
     assert behaviour.first_slip == "right"
     assert behaviour.sweep == "right_to_left"
@@ -215,9 +215,9 @@ def test_stick_slip_cycles_with_partial_waves_first():
 
 
 def test_labels_equal_for_equal_sequences(bench_case):
-    again = classify(simulate(Slab(height=40.0), Coulomb(fs=1.0), LoadPath()))
-    assert again.label == classify(bench_case).label
-    other = classify(simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath()))
+    again = describe_behaviour(simulate(Slab(height=40.0), Coulomb(fs=1.0), LoadPath()))
+    assert again.label == describe_behaviour(bench_case).label
+    other = describe_behaviour(simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath()))
     assert other.label != again.label
 
 

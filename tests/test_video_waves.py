@@ -25,7 +25,7 @@ from slipwave.campaign import read_campaign
 from slipwave.events import detect_events
 from slipwave.io import read_acquisition
 from slipwave.video import find_geometry, kymograph, open_frames
-from slipwave.video.waves import WAVE_COLUMNS, align_clocks, fuse, track_waves
+from slipwave.video import WAVE_COLUMNS, align_clocks, fuse, track_waves
 
 ROOT = Path(__file__).parents[1]
 BENCH = ROOT / "raw_data" / "bench"

@@ -66,7 +66,7 @@ def test_full_run_on_default_campaign(workdir):
         page = (workdir / f"reports/{test_id}.html").read_text()
         assert f"Test {test_id}" in page
         assert "<h2>Events</h2>" in page and "<h2>Video</h2>" in page
-        for rule in ("ingest", "detect", "kymograph", "waves", "test_page"):
+        for rule in ("ingest", "detect", "kymograph", "waves", "report"):
             assert (workdir / f"results/logs/{rule}/{test_id}.log").exists()
         kymo = read_dataset(workdir / f"results/{test_id}/kymograph.nc")
         assert kymo.sizes["time"] > 6900 and kymo["x"].attrs["units"] == "mm"

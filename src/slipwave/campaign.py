@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shlex
 from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
@@ -20,6 +19,16 @@ def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
 
     Empty optional cells (``frames``, ``columns``, ``gross_edge_ratio``)
     become empty strings.
+
+    Parameters
+    ----------
+    path
+        The table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per test, all cells text, indexed by ``test_id``.
 
     Raises
     ------
@@ -56,7 +65,26 @@ def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
 
 
 def column_map(config: Mapping[str, Any], name: str) -> dict[str, str]:
-    """The column mapping called ``name`` in the config (empty for no name)."""
+    """The column mapping called ``name`` in the config.
+
+    Parameters
+    ----------
+    config
+        The workflow's config (its ``column_maps``).
+    name
+        The map's name; empty for none.
+
+    Returns
+    -------
+    dict
+        Header name (without its unit) -> channel; empty for no name.
+
+    Raises
+    ------
+    ConfigError
+        If the config has no map of that name.
+
+    """
     if not name:
         return {}
     maps = config.get("column_maps") or {}
@@ -66,43 +94,84 @@ def column_map(config: Mapping[str, Any], name: str) -> dict[str, str]:
     return {str(k): str(v) for k, v in maps[name].items()}
 
 
-def column_arguments(config: Mapping[str, Any], name: str) -> str:
-    """``--column NAME=CHANNEL`` options of ``slipwave ingest`` for a named map."""
-    return " ".join(
-        shlex.quote(f"--column={header}={channel}")
-        for header, channel in column_map(config, name).items()
-    )
+def column_pairs(config: Mapping[str, Any], name: str) -> list[str]:
+    """The column map called ``name`` as ``NAME=CHANNEL`` values of ``slipwave ingest --columns``.
 
+    Parameters
+    ----------
+    config
+        The workflow's config.
+    name
+        A test's ``columns`` cell (empty: no map).
 
-DETECTION_OPTIONS = {
-    "threshold": "--threshold",
-    "max_spike": "--max-spike",
-    "max_duration": "--max-duration",
-    "min_asymmetry": "--min-asymmetry",
-    "gross_edge_ratio": "--gross-edge-ratio",
-}
-"""Keys of the config's ``detection`` section and the ``slipwave detect`` options they set."""
-
-
-def detection_arguments(config: Mapping[str, Any], gross_edge_ratio: str = "") -> str:
-    """``slipwave detect`` options from the config's ``detection`` section.
-
-    A test's own ``gross_edge_ratio`` cell (campaign table), when not empty,
-    overrides the config's.
+    Returns
+    -------
+    list of str
+        One ``header=channel`` per mapped column.
 
     Examples
     --------
-    >>> detection_arguments({"detection": {"threshold": 10, "gross_edge_ratio": 0.9}}, "1.3")
-    '--threshold=10 --gross-edge-ratio=1.3'
+    >>> column_pairs({"column_maps": {"lab": {"Zeit": "time", "Kraft x": "T"}}}, "lab")
+    ['Zeit=time', 'Kraft x=T']
     """
-    settings = dict(config.get("detection") or {})
-    if gross_edge_ratio:
+    return [f"{header}={channel}" for header, channel in column_map(config, name).items()]
+
+
+def gross_edge_ratio(config: Mapping[str, Any], test: Mapping[str, str]) -> float:
+    """A test's DG/DD ratio from which a T drop is a gross slip.
+
+    Parameters
+    ----------
+    config
+        The validated workflow config (``detection.gross_edge_ratio`` filled in).
+    test
+        The test's row of the campaign table; its ``gross_edge_ratio`` cell,
+        when not empty, wins over the config's.
+
+    Returns
+    -------
+    float
+        The ratio.
+
+    Examples
+    --------
+    >>> config = {"detection": {"gross_edge_ratio": 0.9}}
+    >>> gross_edge_ratio(config, {"gross_edge_ratio": "1.3"}), gross_edge_ratio(config, {})
+    (1.3, 0.9)
+    """
+    cell = str(test.get("gross_edge_ratio") or "")
+    if not cell:
+        return float(config["detection"]["gross_edge_ratio"])
+    try:
+        ratio = float(cell)
+    except ValueError as err:
+        raise ConfigError(f"test {test.get('test_id', '?')!r}: gross_edge_ratio {cell!r} is "
+                          "not a number") from err
+    if not ratio > 0:
+        raise ConfigError(f"test {test.get('test_id', '?')!r}: gross_edge_ratio {cell!r} must "
+                          "be positive")
+    return ratio
+
+
+def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame) -> None:
+    """Check what the schemas cannot: the tests' column maps and per-test settings.
+
+    Parameters
+    ----------
+    config
+        The validated workflow config.
+    campaign
+        From :func:`read_campaign`.
+
+    Raises
+    ------
+    ConfigError
+        Naming the test and what is wrong, before any job starts.
+
+    """
+    for _, test in campaign.iterrows():
         try:
-            settings["gross_edge_ratio"] = float(gross_edge_ratio)
-        except ValueError as err:
-            raise ConfigError(f"gross_edge_ratio {gross_edge_ratio!r} is not a number") from err
-    unknown = set(settings) - set(DETECTION_OPTIONS)
-    if unknown:
-        raise ConfigError(f"unknown detection settings: {', '.join(sorted(unknown))}")
-    return " ".join(shlex.quote(f"{DETECTION_OPTIONS[key]}={value}")
-                    for key, value in settings.items() if value is not None)
+            column_map(config, test["columns"])
+        except ConfigError as err:
+            raise ConfigError(f"test {test['test_id']!r}: {err}") from err
+        gross_edge_ratio(config, test)

@@ -1,15 +1,24 @@
-"""The ``slipwave`` command: one entry point, a subcommand per stage."""
+"""The ``slipwave`` command: one entry point, a subcommand per stage.
+
+A thin layer: argument parsing, then calls into the package. Each workflow stage
+has one name for its rule, its ``workflow/rules/<stage>.smk``, its subcommand and
+its module: ingest (:mod:`slipwave.io.ingest`), detect (:mod:`slipwave.events.detect`),
+summary (:mod:`slipwave.events.summary`), kymograph (:mod:`slipwave.video.kymograph`),
+waves (:mod:`slipwave.video.waves`) and report (:mod:`slipwave.report`). Defaults
+come from :mod:`slipwave.defaults`.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Literal
+from typing import Any
 
 from slipwave import __version__
-from slipwave.errors import SlipwaveError
+from slipwave import defaults as default
+from slipwave.errors import SlipwaveError, warning_lines
 
 
 def _column_pair(text: str) -> tuple[str, str]:
@@ -19,35 +28,27 @@ def _column_pair(text: str) -> tuple[str, str]:
     return header, channel
 
 
+def _optional_float(text: str) -> float | None:
+    if text.lower() == "none":
+        return None
+    try:
+        return float(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"expected a number or 'none', got {text!r}") from err
+
+
+def _print_warnings(source: object, attrs: Mapping[str, Any]) -> None:
+    for warning in warning_lines(attrs):
+        print(f"warning: {source}: {warning}", file=sys.stderr)
+
+
 def _ingest(args: argparse.Namespace) -> None:
     from slipwave.io import read_acquisition, write_dataset
 
-    recording = read_acquisition(args.raw, columns=dict(args.column) or None)
+    recording = read_acquisition(args.raw, columns=dict(args.columns) or None)
     write_dataset(recording, args.output)
-    for warning in filter(None, recording.attrs["warnings"].splitlines()):
-        print(f"warning: {args.raw}: {warning}", file=sys.stderr)
+    _print_warnings(args.raw, recording.attrs)
     print(f"{args.raw} -> {args.output}: {recording.sizes['time']} samples")
-
-
-def _report(args: argparse.Namespace) -> None:
-    from slipwave.io import read_dataset
-    from slipwave.report import write_test_page
-
-    events = None if args.events is None else read_dataset(args.events)
-    video = None
-    if args.kymograph is not None:
-        import json
-
-        import pandas as pd
-
-        from slipwave.report import video_summary
-
-        if args.waves is None or args.clock is None:
-            raise SlipwaveError("--kymograph needs --waves and --clock")
-        video = video_summary(read_dataset(args.kymograph), pd.read_csv(args.waves),
-                              json.loads(args.clock.read_text()), args.frames, events)
-    write_test_page(read_dataset(args.recording), args.output, events, video)
-    print(f"{args.recording} -> {args.output}")
 
 
 def _detect(args: argparse.Namespace) -> None:
@@ -67,13 +68,12 @@ def _detect(args: argparse.Namespace) -> None:
         write_dataset(dataset, args.netcdf)
     with atomic_output(args.output) as temporary:
         events.to_csv(temporary, index=False, float_format="%.6g")
-    for warning in events.attrs["warnings"]:
-        print(f"warning: {args.recording}: {warning}", file=sys.stderr)
+    _print_warnings(args.recording, events.attrs)
     counts = ", ".join(f"{n} {kind}" for kind, n in wave_counts(events).items())
     print(f"{args.recording} -> {args.output}: {len(events)} events ({counts})")
 
 
-def _summarize(args: argparse.Namespace) -> None:
+def _summary(args: argparse.Namespace) -> None:
     import pandas as pd
 
     from slipwave.events import summary_row
@@ -103,60 +103,57 @@ def _kymograph(args: argparse.Namespace) -> None:
     kymo.attrs["source"] = str(args.frames)
     kymo.attrs["warnings"] = "\n".join(source.warnings)
     write_dataset(kymo, args.output)
-    for warning in source.warnings:
-        print(f"warning: {warning}", file=sys.stderr)
+    _print_warnings(args.frames, kymo.attrs)
     print(f"{args.frames} -> {args.output}: {kymo.sizes['time']} frames, contact at columns "
           f"{geometry.left:g}-{geometry.right:g}, interface row {geometry.interface_row}")
 
 
 def _waves(args: argparse.Namespace) -> None:
-    import json
-
-    from slipwave.events import EVENT_COLUMNS
+    from slipwave.events import events_table
     from slipwave.io import atomic_output, read_dataset
-    from slipwave.video.waves import align_clocks, fuse, track_waves
+    from slipwave.video import align_clocks, fuse, on_card_clock, track_waves
 
     kymo = read_dataset(args.kymograph)
+    events = events_table(read_dataset(args.events))
     waves = track_waves(kymo)
-    recording = read_dataset(args.recording)
-    events = read_dataset(args.events)
-    table = events[list(EVENT_COLUMNS)].to_dataframe().reset_index(drop=True)
-    clock = align_clocks(waves, kymo, recording, table)
-    waves = waves.assign(t_start_card=clock.acquisition_time(waves["t_start"].to_numpy()),
-                         t_end_card=clock.acquisition_time(waves["t_end"].to_numpy()))
+    clock = align_clocks(waves, kymo, read_dataset(args.recording), events)
+    waves = on_card_clock(waves, clock)
     with atomic_output(args.output) as temporary:
         waves.to_csv(temporary, index=False, float_format="%.6g")
     with atomic_output(args.fused) as temporary:
-        fuse(table, waves, clock).to_csv(temporary, index=False, float_format="%.6g")
+        fuse(events, waves, clock).to_csv(temporary, index=False, float_format="%.6g")
     with atomic_output(args.clock) as temporary:
-        temporary.write_text(json.dumps({"offset_s": clock.offset, "rate": clock.rate,
-                                         "residual_s": clock.residual, "method": clock.method,
-                                         "pairs": clock.pairs}, indent=2) + "\n")
+        temporary.write_text(clock.to_json())
     print(f"{args.kymograph} -> {args.output}: {len(waves)} waves; camera clock: "
           f"card = {clock.offset:.4f} s + {clock.rate:.6f} x camera ({clock.method}, residual "
           f"{clock.residual * 1000:.1f} ms)")
 
 
-def _synth(args: argparse.Namespace) -> None:
-    from slipwave.io import write_acquisition
-    from slipwave.synthetic import SawtoothBench, sawtooth_recording
+def _report(args: argparse.Namespace) -> None:
+    from slipwave.io import read_dataset
+    from slipwave.report import video_summary, write_test_page
 
-    tests: list[tuple[SawtoothBench, Literal["canonical", "vendor"]]] = [
-        (SawtoothBench(test_id="saw_hl050", height=40.0, ratio=1.0), "canonical"),
-        (SawtoothBench(test_id="saw_hl025", height=20.0, ratio=0.9, stiffness=26.0,
-                       gross_drops=(4.0, 6.0, 8.0), partial_drop=2.0), "canonical"),
-        (SawtoothBench(test_id="saw_hl075", height=60.0, ratio=1.1, stiffness=16.0,
-                       gross_drops=(6.0, 10.0, 14.0, 18.0), partial_drop=3.0), "vendor"),
-    ]
-    for k, (bench, flavour) in enumerate(tests):
-        path = Path(args.output) / f"{bench.test_id}.csv"
-        write_acquisition(sawtooth_recording(bench, seed=args.seed + k), path, flavour=flavour)
-        print(f"{path} ({flavour})")
+    events = None if args.events is None else read_dataset(args.events)
+    video = None
+    if args.kymograph is not None:
+        import pandas as pd
+
+        from slipwave.video import ClockFit
+
+        if args.waves is None or args.clock is None:
+            raise SlipwaveError("--kymograph needs --waves and --clock")
+        fused = None if args.fused is None else pd.read_csv(args.fused)
+        video = video_summary(read_dataset(args.kymograph), pd.read_csv(args.waves),
+                              ClockFit.from_json(args.clock.read_text()), args.frames, events,
+                              fused)
+    write_test_page(read_dataset(args.recording), args.output, events, video)
+    print(f"{args.recording} -> {args.output}")
 
 
 def _simulate(args: argparse.Namespace) -> None:
+    from slipwave.cache import DiskCache
     from slipwave.io import write_dataset
-    from slipwave.solver import Coulomb, LoadPath, Slab, classify, simulate
+    from slipwave.solver import Coulomb, LoadPath, Slab, condense, describe_behaviour, simulate
 
     slab = Slab(length=args.length, height=args.height, width=args.width,
                 youngs_modulus=args.youngs_modulus, poisson_ratio=args.poisson_ratio,
@@ -164,8 +161,9 @@ def _simulate(args: argparse.Namespace) -> None:
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
                     normal_control=args.normal_control, max_travel=args.max_travel,
                     travel_step=args.travel_step, machine_stiffness=args.machine_stiffness)
-    result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path)
-    behaviour = classify(result)
+    result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path,
+                      condensed=condense(slab, store=DiskCache()))
+    behaviour = describe_behaviour(result)
     result.attrs["behaviour"] = behaviour.label
     write_dataset(result, args.output)
     if args.plot:
@@ -178,20 +176,18 @@ def _simulate(args: argparse.Namespace) -> None:
 
 
 def _bench(args: argparse.Namespace) -> None:
-    import yaml
+    from slipwave.bench.generate import read_bench_config, write_campaign
 
-    from slipwave.bench.generate import load_tests, write_campaign
-    from slipwave.errors import ConfigError
-
-    try:
-        config = yaml.safe_load(Path(args.config).read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as err:
-        raise ConfigError(f"{args.config}: cannot be read as YAML: {err}") from err
-    if not isinstance(config, dict):
-        raise ConfigError(f"{args.config}: expected a mapping with 'tests'")
-    table = write_campaign(load_tests(config), args.output, seed=args.seed,
+    table = write_campaign(read_bench_config(args.config), args.output, seed=args.seed,
                            progress=not args.quiet)
     print(f"{args.config} -> {args.output} ({table.name})")
+
+
+def _sawtooth(args: argparse.Namespace) -> None:
+    from slipwave.bench.sawtooth import write_sawtooth_campaign
+
+    for path in write_sawtooth_campaign(args.output, seed=args.seed):
+        print(path)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -210,9 +206,9 @@ def build_parser() -> argparse.ArgumentParser:
     ingest.add_argument("raw", type=Path, help="acquisition CSV (opened read-only)")
     ingest.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     ingest.add_argument(
-        "--column", type=_column_pair, action="append", default=[], metavar="NAME=CHANNEL",
-        help="map a header name (without its unit) to time, index, T, N, DG, DD, DT or "
-        "ignore; repeatable",
+        "--columns", type=_column_pair, nargs="*", default=[], metavar="NAME=CHANNEL",
+        help="map header names (without their unit) to time, index, T, N, DG, DD, DT or "
+        "ignore",
     )
     ingest.set_defaults(run=_ingest)
 
@@ -225,6 +221,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="kymograph netCDF from 'slipwave kymograph'")
     report.add_argument("--waves", type=Path, default=None, help="waves CSV of 'slipwave waves'")
     report.add_argument("--clock", type=Path, default=None, help="clock JSON of 'slipwave waves'")
+    report.add_argument("--fused", type=Path, default=None,
+                        help="events with their waves, CSV of 'slipwave waves --fused'")
     report.add_argument("--frames", type=Path, default=None,
                         help="the video (or image folder) for frames around the first gross slip")
     report.set_defaults(run=_report)
@@ -234,17 +232,25 @@ def build_parser() -> argparse.ArgumentParser:
         description="Press the flat on the slab, then move it until gross sliding (or up to "
         "--max-travel), and write the zone evolution as netCDF.",
     )
-    sim.add_argument("--height", type=float, default=40.0, help="slab height H, mm (40)")
-    sim.add_argument("--length", type=float, default=80.0, help="contact length L, mm (80)")
-    sim.add_argument("--width", type=float, default=10.0, help="slab width w, mm (10)")
-    sim.add_argument("--youngs-modulus", type=float, default=7.0, help="E, MPa (7)")
-    sim.add_argument("--poisson-ratio", type=float, default=0.48, help="nu (0.48)")
-    sim.add_argument("--elements", type=int, default=160, help="elements along the contact")
+    sim.add_argument("--height", type=float, default=default.SLAB_HEIGHT_MM,
+                     help="slab height H, mm (%(default)s)")
+    sim.add_argument("--length", type=float, default=default.CONTACT_LENGTH_MM,
+                     help="contact length L, mm (%(default)s)")
+    sim.add_argument("--width", type=float, default=default.SLAB_WIDTH_MM,
+                     help="slab width w, mm (%(default)s)")
+    sim.add_argument("--youngs-modulus", type=float, default=default.YOUNGS_MODULUS_MPA,
+                     help="E, MPa (%(default)s)")
+    sim.add_argument("--poisson-ratio", type=float, default=default.POISSON_RATIO,
+                     help="nu (%(default)s)")
+    sim.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
+                     help="elements along the contact (%(default)s)")
     sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
     sim.add_argument("--fs", type=float, required=True, help="static friction coefficient")
     sim.add_argument("--fd", type=float, default=None, help="dynamic coefficient (fs)")
-    sim.add_argument("--normal-load", type=float, default=76.0, help="N, newtons (76)")
-    sim.add_argument("--tangential-step", type=float, default=2.0, help="T step, newtons (2)")
+    sim.add_argument("--normal-load", type=float, default=default.NORMAL_LOAD_N,
+                     help="N, newtons (%(default)s)")
+    sim.add_argument("--tangential-step", type=float, default=default.TANGENTIAL_STEP_N,
+                     help="T step, newtons (%(default)s)")
     sim.add_argument("--normal-control", choices=["displacement", "force"],
                      default="displacement", help="what is held after the normal loading")
     sim.add_argument("--max-travel", type=float, default=None,
@@ -284,25 +290,26 @@ def build_parser() -> argparse.ArgumentParser:
                         help="smallest T drop, N (default: --threshold x T noise)")
     detect.add_argument("--min-jump", type=float, default=None,
                         help="smallest DG/DD jump, mm (default: --threshold x noise)")
-    detect.add_argument("--threshold", type=float, default=8.0,
-                        help="default thresholds in noise standard deviations (8)")
-    detect.add_argument("--max-spike", type=int, default=2,
-                        help="longest spike ignored, samples (2)")
-    detect.add_argument("--max-duration", type=float, default=None,
-                        help="longest drop looked for, s (a tenth of the recording)")
-    detect.add_argument("--min-asymmetry", type=float, default=3.0,
-                        help="how much faster than the rise before it a drop must be (3)")
-    detect.add_argument("--gross-edge-ratio", type=float, default=0.9,
-                        help="DG jump / DD jump from which a drop is a gross slip (0.9)")
+    detect.add_argument("--threshold", type=float, default=default.THRESHOLD,
+                        help="default thresholds in noise standard deviations (%(default)s)")
+    detect.add_argument("--max-spike", type=int, default=default.MAX_SPIKE,
+                        help="longest spike ignored, samples (%(default)s)")
+    detect.add_argument("--max-duration", type=_optional_float, default=default.MAX_DURATION_S,
+                        help="longest drop looked for, s ('none': a tenth of the recording)")
+    detect.add_argument("--min-asymmetry", type=float, default=default.MIN_ASYMMETRY,
+                        help="how much faster than the rise before it a drop must be "
+                        "(%(default)s)")
+    detect.add_argument("--gross-edge-ratio", type=float, default=default.GROSS_EDGE_RATIO,
+                        help="DG jump / DD jump from which a drop is a gross slip (%(default)s)")
     detect.set_defaults(run=_detect)
 
-    summarize = commands.add_parser(
-        "summarize", help="one row per test: T/|N| at gross slips, wave counts, phases",
+    summary = commands.add_parser(
+        "summary", help="one row per test: T/|N| at gross slips, wave counts, phases",
     )
-    summarize.add_argument("events", type=Path, nargs="+",
-                           help="events netCDF files from 'slipwave detect --netcdf'")
-    summarize.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
-    summarize.set_defaults(run=_summarize)
+    summary.add_argument("events", type=Path, nargs="+",
+                         help="events netCDF files from 'slipwave detect --netcdf'")
+    summary.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
+    summary.set_defaults(run=_summary)
 
     kymo = commands.add_parser(
         "kymograph", help="kymograph of the band above the interface, from a video",
@@ -312,9 +319,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     kymo.add_argument("frames", type=Path, help="video file, image folder or TIFF stack")
     kymo.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
-    kymo.add_argument("--length", type=float, default=80.0, help="contact length, mm (80)")
-    kymo.add_argument("--band", type=float, nargs=2, default=[0.5, 2.0], metavar=("LOW", "HIGH"),
-                      help="band above the interface, mm (0.5 2.0)")
+    kymo.add_argument("--length", type=float, default=default.CONTACT_LENGTH_MM,
+                      help="contact length, mm (%(default)s)")
+    kymo.add_argument("--band", type=float, nargs=2, default=list(default.BAND_MM),
+                      metavar=("LOW", "HIGH"), help="band above the interface, mm (%(default)s)")
     kymo.add_argument("--geometry", type=float, nargs=3, default=None,
                       metavar=("ROW", "LEFT", "RIGHT"),
                       help="interface row and the contact's end columns, px (found if not "
@@ -337,14 +345,14 @@ def build_parser() -> argparse.ArgumentParser:
     waves.add_argument("--clock", type=Path, required=True, help="clock fit JSON to write")
     waves.set_defaults(run=_waves)
 
-    synth = commands.add_parser(
-        "synth", help="write three saw-tooth CSVs from a signal model (fixtures, demos)",
+    sawtooth = commands.add_parser(
+        "sawtooth", help="write three saw-tooth CSVs from a signal model (fixtures, demos)",
         description="Write three saw-tooth test CSVs (simple signal model, not the virtual "
         "bench), one of them in the vendor flavour.",
     )
-    synth.add_argument("output", type=Path, help="folder to write into")
-    synth.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    synth.set_defaults(run=_synth)
+    sawtooth.add_argument("output", type=Path, help="folder to write into")
+    sawtooth.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    sawtooth.set_defaults(run=_sawtooth)
     return parser
 
 

@@ -7,7 +7,9 @@ message names the file, the place in it and what is wrong.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from os import PathLike
+from typing import Any
 
 
 class SlipwaveError(Exception):
@@ -72,3 +74,29 @@ class SolverError(SlipwaveError):
         self.step = step
         self.residual = residual
         super().__init__(f"step {step}: {message} (relative residual {residual:.3g})")
+
+
+def warning_lines(attrs: Mapping[str, Any]) -> list[str]:
+    r"""The warnings stored in ``attrs["warnings"]``, one per line, as a list.
+
+    Every Dataset and DataFrame slipwave makes keeps its warnings that way
+    (text, one warning per line), which netCDF stores as it is.
+
+    Parameters
+    ----------
+    attrs
+        The ``attrs`` of a Dataset or DataFrame.
+
+    Returns
+    -------
+    list of str
+        The non-empty lines.
+
+    Examples
+    --------
+    >>> warning_lines({"warnings": "first\n\nsecond"})
+    ['first', 'second']
+    >>> warning_lines({})
+    []
+    """
+    return [line for line in str(attrs.get("warnings") or "").splitlines() if line]

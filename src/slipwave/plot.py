@@ -1,14 +1,13 @@
-"""Figures of recordings, drawn with matplotlib on the non-interactive backend."""
+"""Figures of recordings, simulations and videos.
+
+Figures are :class:`matplotlib.figure.Figure` objects made without pyplot, so
+importing this module selects no backend and drawing needs no display.
+"""
 
 from __future__ import annotations
 
 import io
 
-import matplotlib
-
-matplotlib.use("Agg")  # the workflow runs without a display
-
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import seaborn as sns
@@ -17,8 +16,9 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
+from slipwave.errors import SlipwaveError
+from slipwave.events.summary import load_ratio
 from slipwave.io import CHANNELS
-from slipwave.signals import load_ratio
 
 PHASE_COLOURS = {"normal_loading": "#bbbbbb", "partial_slip": "#8fbc8f",
                  "gross_slip": "#e07b6a"}
@@ -47,10 +47,8 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
     """
     panels = [c for c in CHANNELS if c in recording.data_vars]
     with sns.axes_style("whitegrid"):
-        fig, axes = plt.subplots(
-            len(panels) + 1, 1, sharex=True, figsize=(9.0, 1.6 * (len(panels) + 1) + 0.6),
-            layout="constrained",
-        )
+        fig = Figure(figsize=(9.0, 1.6 * (len(panels) + 1) + 0.6), layout="constrained")
+        axes = fig.subplots(len(panels) + 1, 1, sharex=True)
     time = recording["time"].values
     colours = sns.color_palette("deep", len(panels) + 1)
     for ax, name, colour in zip(axes, panels, colours, strict=False):
@@ -86,10 +84,9 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
 
 
 def figure_png(fig: Figure, *, dpi: int = 110) -> bytes:
-    """Render a figure to PNG bytes and close it."""
+    """Render a figure to PNG bytes."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi)
-    plt.close(fig)
     return buffer.getvalue()
 
 
@@ -119,14 +116,15 @@ def plot_zones(simulation: xr.Dataset, *, vertical: str = "T") -> Figure:
     elif vertical == "step":
         rows, values, label = np.arange(state.shape[0]), None, "load step"
     else:
-        raise ValueError(f"vertical must be 'T' or 'step', not {vertical!r}")
+        raise SlipwaveError(f"vertical must be 'T' or 'step', not {vertical!r}")
     if values is None:
         edges_y = np.arange(rows.size + 1) - 0.5
     else:
         middle = 0.5 * (values[1:] + values[:-1])
         edges_y = np.concatenate([[values[0] - (middle[0] - values[0])], middle,
                                   [values[-1] + (values[-1] - middle[-1])]])
-    fig, ax = plt.subplots(figsize=(8.0, 5.0), layout="constrained")
+    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+    ax = fig.subplots()
     colours = ListedColormap(list(ZONE_COLOURS.values()))
     ax.pcolormesh(edges_x, edges_y, state[rows], cmap=colours, vmin=-0.5, vmax=2.5)
     ax.set_xlabel("x along the contact [mm]")
@@ -154,7 +152,8 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
     if window is not None:
         moved = moved.sel(time=slice(*window))
     time, x = moved["time"].values, moved["x"].values
-    fig, ax = plt.subplots(figsize=(9.0, 3.4), layout="constrained")
+    fig = Figure(figsize=(9.0, 3.4), layout="constrained")
+    ax = fig.subplots()
     ax.imshow(moved.values.T, aspect="auto", origin="lower", cmap="magma",
               extent=(time[0], time[-1], x[0], x[-1]), vmin=0.0,
               vmax=float(np.percentile(moved.values, 99.9)) or 1.0, interpolation="nearest")
@@ -181,8 +180,8 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
 
 def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
     """A row of frames with their times."""
-    fig, axes = plt.subplots(1, len(images), figsize=(2.2 * len(images), 1.6),
-                             layout="constrained", squeeze=False)
+    fig = Figure(figsize=(2.2 * len(images), 1.6), layout="constrained")
+    axes = fig.subplots(1, len(images), squeeze=False)
     for ax, image, time in zip(axes[0], images, times, strict=True):
         ax.imshow(image, cmap="gray", vmin=0, vmax=np.iinfo(image.dtype).max)
         ax.set_title(f"{time:.2f} s", fontsize=8)

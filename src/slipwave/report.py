@@ -1,4 +1,4 @@
-"""HTML pages of tests, from the workflow's results."""
+"""The report stage: HTML pages of tests, from the workflow's results."""
 
 from __future__ import annotations
 
@@ -13,8 +13,11 @@ import pandas as pd
 import xarray as xr
 
 from slipwave import __version__
+from slipwave.errors import warning_lines
+from slipwave.events import EVENT_COLUMNS, events_table, wave_counts
 from slipwave.io import CHANNELS, atomic_output
-from slipwave.plot import figure_png, plot_recording
+from slipwave.plot import figure_png, plot_frames, plot_kymograph, plot_recording
+from slipwave.video import ClockFit, open_frames
 
 
 def _environment() -> jinja2.Environment:
@@ -47,10 +50,21 @@ def channel_summary(recording: xr.Dataset) -> list[dict[str, Any]]:
 
 
 def event_summary(events: xr.Dataset) -> dict[str, Any]:
-    """Counts, friction ratios, warnings and the table of events, for the page."""
-    from slipwave.events import EVENT_COLUMNS, wave_counts
+    """Counts, friction ratios, warnings and the table of events, for the page.
 
-    table = events[list(EVENT_COLUMNS)].to_dataframe()
+    Parameters
+    ----------
+    events
+        ``events.nc``, from :func:`slipwave.events.events_dataset`.
+
+    Returns
+    -------
+    dict
+        ``counts``, ``ratios`` (static and dynamic: mean, std, interval),
+        ``warnings``, ``columns`` and ``rows`` of the events table.
+
+    """
+    table = events_table(events)
     ratios = {
         name: {key: float(events[f"{name}_{key}"]) for key in ("mean", "std", "ci_low",
                                                                 "ci_high")}
@@ -59,29 +73,59 @@ def event_summary(events: xr.Dataset) -> dict[str, Any]:
     return {
         "counts": wave_counts(table),
         "ratios": ratios,
-        "warnings": [w for w in str(events.attrs.get("warnings", "")).splitlines() if w],
+        "warnings": warning_lines(events.attrs),
         "columns": list(EVENT_COLUMNS),
         "rows": table.to_dict("records"),
     }
 
 
+def _frames_at(frames: str | PathLike[str], wanted: np.ndarray) -> tuple[list[np.ndarray],
+                                                                           list[float]]:
+    """The first frame at or after each wanted camera time (stops reading after the last)."""
+    images: list[np.ndarray] = []
+    times: list[float] = []
+    for frame in open_frames(frames):
+        if len(images) < wanted.size and frame.time >= wanted[len(images)] - 1e-6:
+            images.append(frame.image)
+            times.append(frame.time)
+        if len(images) == wanted.size:
+            break
+    return images, times
+
+
 def video_summary(
     kymo: xr.Dataset,
     waves: pd.DataFrame,
-    clock: dict[str, Any],
+    clock: ClockFit,
     frames: str | PathLike[str] | None = None,
     events: xr.Dataset | None = None,
+    fused: pd.DataFrame | None = None,
 ) -> dict[str, Any]:
     """The page's video section: kymograph with fronts, frames around the first gross slip.
 
-    ``clock`` is the fit ``slipwave waves`` writes (``offset_s``, ``rate``...).
+    Parameters
+    ----------
+    kymo
+        From :func:`slipwave.video.kymograph`.
+    waves
+        From :func:`slipwave.video.track_waves`.
+    clock
+        From :func:`slipwave.video.align_clocks` (``clock.json``).
+    frames
+        The video or image folder, for frames around the first gross slip.
+    events
+        ``events.nc``: where the first gross slip is.
+    fused
+        From :func:`slipwave.video.fuse` (``events_video.csv``): how the load
+        events and the waves pair, and whether their kinds agree.
+
+    Returns
+    -------
+    dict
+        Figures (base64 PNG), frames, wave counts and directions, median
+        front speed, the clock, the first gross slip's time and the pairing.
+
     """
-    from slipwave.plot import plot_frames, plot_kymograph
-    from slipwave.video import open_frames
-
-    def camera(card_time: float) -> float:
-        return (card_time - float(clock["offset_s"])) / float(clock["rate"])
-
     figures = [figure_png(plot_kymograph(kymo, waves))]
     gross = None
     if events is not None:
@@ -90,21 +134,20 @@ def video_summary(
             gross = float(events["t_start"].values[np.argmax(kinds == "gross_slip")])
     strip = None
     if gross is not None:
-        start = camera(gross)
+        start = float(clock.camera_time(gross))
         figures.append(figure_png(plot_kymograph(kymo, waves, window=(start - 1.0, start + 1.5))))
         if frames is not None:
-            wanted = start + np.arange(-1, 7) * 0.08
-            images: list[np.ndarray] = []
-            times: list[float] = []
-            for frame in open_frames(frames):
-                if len(images) < wanted.size and frame.time >= wanted[len(images)] - 1e-6:
-                    images.append(frame.image)
-                    times.append(frame.time)
-                if len(images) == wanted.size:
-                    break
+            images, times = _frames_at(frames, start + np.arange(-1, 7) * 0.08)
             if images:
                 strip = base64.b64encode(figure_png(plot_frames(images, times))).decode("ascii")
     resolved = waves[waves["kind"] != "unresolved"]
+    pairing = None
+    if fused is not None:
+        source = fused["source"].value_counts()
+        agrees = fused["kind_agrees"].dropna().astype(bool)
+        pairing = {"both": int(source.get("both", 0)), "load": int(source.get("load", 0)),
+                   "video": int(source.get("video", 0)), "judged": int(agrees.size),
+                   "agree": int(agrees.sum())}
     return {
         "figures": [base64.b64encode(png).decode("ascii") for png in figures],
         "frames": strip,
@@ -114,6 +157,7 @@ def video_summary(
         "speed": float(resolved["speed"].median()) if len(resolved) else float("nan"),
         "clock": clock,
         "first_gross": gross,
+        "pairing": pairing,
     }
 
 
@@ -140,7 +184,7 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         source=attrs.get("source", ""),
         sha256=attrs.get("source_sha256", ""),
         source_format=attrs.get("source_format", ""),
-        warnings=[w for w in str(attrs.get("warnings", "")).splitlines() if w],
+        warnings=warning_lines(attrs),
         metadata=metadata,
         channels=channel_summary(recording),
         samples=int(time.size),

@@ -1,16 +1,22 @@
-# Input and parameter functions shared by the rules.
+# Input and parameter functions shared by the rules: lookups in the campaign
+# table, no logic (that lives in slipwave.campaign).
 
 
-def page_inputs(wildcards):
+def test_row(wildcards):
+    return campaign.loc[wildcards.test_id]
+
+
+def report_inputs(wildcards):
     inputs = {
         "recording": f"results/{wildcards.test_id}/recording.nc",
         "events": f"results/{wildcards.test_id}/events.nc",
     }
-    frames = tests.loc[wildcards.test_id, "frames"]
+    frames = test_row(wildcards)["frames"]
     if frames:
         inputs.update(
             kymograph=f"results/{wildcards.test_id}/kymograph.nc",
             waves=f"results/{wildcards.test_id}/waves.csv",
+            fused=f"results/{wildcards.test_id}/events_video.csv",
             clock=f"results/{wildcards.test_id}/clock.json",
             frames=frames,
         )
@@ -21,6 +27,6 @@ def video_options(wildcards, input):
     if "kymograph" not in input.keys():
         return ""
     return (
-        f"--kymograph {input.kymograph} --waves {input.waves} --clock {input.clock} "
-        f"--frames {input.frames}"
+        f"--kymograph {input.kymograph} --waves {input.waves} --fused {input.fused} "
+        f"--clock {input.clock} --frames {input.frames}"
     )

@@ -13,25 +13,16 @@ rule detect:
     log:
         "results/logs/detect/{test_id}.log",
     params:
-        options=lambda wildcards: detection_arguments(
-            config, tests.loc[wildcards.test_id, "gross_edge_ratio"]
-        ),
+        threshold=config["detection"]["threshold"],
+        max_spike=config["detection"]["max_spike"],
+        max_duration=config["detection"]["max_duration"],
+        min_asymmetry=config["detection"]["min_asymmetry"],
+        gross_edge_ratio=lambda wildcards: gross_edge_ratio(config, test_row(wildcards)),
     conda:
         "../envs/slipwave.yaml"
     shell:
         "slipwave detect {input:q} -o {output.csv:q} --netcdf {output.netcdf:q} "
-        "--test-id {wildcards.test_id:q} {params.options} > {log:q} 2>&1"
-
-
-rule summary:
-    """The campaign summary: one row per test (T/|N| at gross slips, waves, phases)."""
-    input:
-        expand("results/{test_id}/events.nc", test_id=TEST_IDS),
-    output:
-        report("results/summary.csv", caption="../report/summary.rst", category="Campaign"),
-    log:
-        "results/logs/summary.log",
-    conda:
-        "../envs/slipwave.yaml"
-    shell:
-        "slipwave summarize {input:q} -o {output:q} > {log:q} 2>&1"
+        "--test-id {wildcards.test_id:q} --threshold {params.threshold} "
+        "--max-spike {params.max_spike} --max-duration {params.max_duration} "
+        "--min-asymmetry {params.min_asymmetry} --gross-edge-ratio {params.gross_edge_ratio} "
+        "> {log:q} 2>&1"

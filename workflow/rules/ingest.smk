@@ -1,14 +1,14 @@
 rule ingest:
     """Read a test's acquisition CSV into CF netCDF (N, mm, s)."""
     input:
-        csv=lambda wildcards: tests.loc[wildcards.test_id, "csv"],
+        csv=lambda wildcards: test_row(wildcards)["csv"],
     output:
         "results/{test_id}/recording.nc",
     log:
         "results/logs/ingest/{test_id}.log",
     params:
-        columns=lambda wildcards: column_arguments(config, tests.loc[wildcards.test_id, "columns"]),
+        columns=lambda wildcards: column_pairs(config, test_row(wildcards)["columns"]),
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave ingest {input.csv:q} -o {output:q} {params.columns} > {log:q} 2>&1"
+        "slipwave ingest {input.csv:q} -o {output:q} --columns {params.columns:q} > {log:q} 2>&1"

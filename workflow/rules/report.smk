@@ -1,16 +1,16 @@
-rule test_page:
+rule report:
     """The HTML page of one test: channels, phases and slips; kymograph and frames if filmed."""
     input:
-        unpack(page_inputs),
+        unpack(report_inputs),
     output:
         report(
             "reports/{test_id}.html",
-            caption="../report/test_page.rst",
+            caption="../report/report.rst",
             category="Tests",
             labels={"test": "{test_id}"},
         ),
     log:
-        "results/logs/test_page/{test_id}.log",
+        "results/logs/report/{test_id}.log",
     params:
         video=video_options,
     conda:

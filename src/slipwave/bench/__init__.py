@@ -3,7 +3,7 @@
 - :mod:`slipwave.bench.generate`: one test (:class:`BenchTest`,
   :func:`simulate_test`, :func:`write_test`) or a campaign
   (:func:`write_campaign`, the ``slipwave bench`` command), with the truth.
-- :mod:`slipwave.bench.signals`: a machine-driven simulation sampled like the
+- :mod:`slipwave.bench.sensors`: a machine-driven simulation sampled like the
   card, and the sensor model.
 - :mod:`slipwave.bench.camera`: stresses of the slab at the camera's pixels,
   isochromatic frames, video files.
@@ -18,7 +18,7 @@ from slipwave.bench.generate import (
     write_campaign,
     write_test,
 )
-from slipwave.bench.signals import DEFAULT_SENSORS, Sensor, apply_sensors, clean_signals
+from slipwave.bench.sensors import DEFAULT_SENSORS, Sensor, apply_sensors, clean_signals
 
 __all__ = [
     "DEFAULT_SENSORS", "BenchResult", "BenchTest", "Camera", "Photoelastic", "Sensor",

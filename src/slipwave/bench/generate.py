@@ -21,19 +21,31 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 import xarray as xr
+import yaml
 from tqdm import tqdm
 
 from slipwave.bench.camera import Camera, Photoelastic, write_image_sequence, write_video
-from slipwave.bench.signals import (
+from slipwave.bench.sensors import (
     DEFAULT_SENSORS,
     apply_sensors,
     clean_signals,
     step_progress,
     wave_windows,
 )
-from slipwave.errors import SlipwaveError
-from slipwave.io import CONVENTIONS, atomic_output, write_acquisition
-from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+from slipwave.cache import DiskCache
+from slipwave.defaults import (
+    BAND_MM,
+    CONTACT_ELEMENTS,
+    CONTACT_LENGTH_MM,
+    CONVENTIONS,
+    POISSON_RATIO,
+    SLAB_HEIGHT_MM,
+    SLAB_WIDTH_MM,
+    YOUNGS_MODULUS_MPA,
+)
+from slipwave.errors import ConfigError, SlipwaveError
+from slipwave.io import atomic_output, write_acquisition
+from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
 
 LED_DURATION = 0.2  # s the sync LED stays lit
 FRONT_WIDTH = 4.0  # mm over which a wave front blends the states before and after it
@@ -53,12 +65,12 @@ class BenchTest:
     """
 
     test_id: str
-    height: float = 40.0
-    length: float = 80.0
-    width: float = 10.0
-    youngs_modulus: float = 7.0
-    poisson_ratio: float = 0.48
-    elements: int = 160
+    height: float = SLAB_HEIGHT_MM
+    length: float = CONTACT_LENGTH_MM
+    width: float = SLAB_WIDTH_MM
+    youngs_modulus: float = YOUNGS_MODULUS_MPA
+    poisson_ratio: float = POISSON_RATIO
+    elements: int = CONTACT_ELEMENTS
     fs: float = 0.9
     fd: float = 0.6
     fs_final: float | None = 1.3
@@ -122,7 +134,9 @@ def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
     >>> result.recording.attrs["test_id"], result.recording.sizes["time"]
     ('demo', 4000)
     """
-    simulation = simulate(spec.slab(), spec.friction(), spec.load_path())
+    slab = spec.slab()
+    simulation = simulate(slab, spec.friction(), spec.load_path(),
+                          condensed=condense(slab, store=DiskCache()))
     clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
                           duration=spec.duration, sample_rate=spec.sample_rate,
                           wave_speed=spec.wave_speed)
@@ -206,9 +220,10 @@ def _camera_truth(spec: BenchTest, simulation: xr.Dataset, events: pd.DataFrame,
     """What the camera can see of each wave: its image change, frames and visibility.
 
     ``camera_change`` is the mean absolute change of the noise-free fringe
-    intensity (8-bit grey levels) that the wave makes in the band 0.5 to 2 mm
-    above the interface, over its slipped range; ``camera_frames`` the number of
-    frames taken while it runs. A wave is ``camera_visible`` when its change is
+    intensity (8-bit grey levels) that the wave makes in the kymograph's band
+    (:data:`slipwave.defaults.BAND_MM` above the interface), over its slipped
+    range; ``camera_frames`` the number of frames taken while it runs. A wave is
+    ``camera_visible`` when its change is
     at least ``CAMERA_SNR`` times the sensor noise and its front shows in at
     least ``CAMERA_FRAMES`` frames (fewer, and neither its direction nor its
     extent can be measured). Without a video, none is.
@@ -222,7 +237,7 @@ def _camera_truth(spec: BenchTest, simulation: xr.Dataset, events: pd.DataFrame,
     camera = Photoelastic(spec.slab(), spec.camera)
     rows = np.nonzero(camera.inside)[0]
     height = (camera.interface_row - (rows + 0.5)) / camera.scale
-    band = (height >= 0.5) & (height <= 2.0)
+    band = (height >= BAND_MM[0]) & (height <= BAND_MM[1])
     x = camera.pixel_x[band]
     changes = []
     for step, low, high in zip(events["step"], events["x_min"], events["x_max"], strict=True):
@@ -357,6 +372,34 @@ def write_test(
     with atomic_output(paths["parameters"]) as temporary:
         temporary.write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
     return paths
+
+
+def read_bench_config(path: str | PathLike[str]) -> list[BenchTest]:
+    """The tests of a campaign YAML file (``defaults`` and ``tests``).
+
+    Parameters
+    ----------
+    path
+        The YAML file.
+
+    Returns
+    -------
+    list of BenchTest
+        One per entry of ``tests``, as :func:`load_tests` makes them.
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read as YAML or is not a mapping.
+
+    """
+    try:
+        config = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        raise ConfigError(f"{path}: cannot be read as YAML: {err}") from err
+    if not isinstance(config, dict):
+        raise ConfigError(f"{path}: expected a mapping with 'tests'")
+    return load_tests(config)
 
 
 def load_tests(config: dict[str, Any]) -> list[BenchTest]:

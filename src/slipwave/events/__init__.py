@@ -1,25 +1,27 @@
-"""Events of a friction test: load drops, edge jumps, slips, phases, friction ratios."""
+"""Events of a friction test: load drops, edge jumps, slips, phases, friction ratios.
 
-from slipwave.events.slips import (
+Detection is composable, in the manner of a seismic trigger: a characteristic
+signal and its noise (:func:`noise_level`, :func:`despike`), thresholds and
+events (:func:`load_drops`, :func:`edge_jumps`), then slips (:func:`classify_events`,
+all of it on a recording: :func:`detect_events`). :func:`events_dataset` and
+:func:`events_table` are the one conversion between the events table and
+``events.nc``; :mod:`slipwave.events.summary` says what the events mean for a test.
+"""
+
+from slipwave.events.detect import (
     EVENT_COLUMNS,
     EVENT_DESCRIPTIONS,
     EVENT_UNITS,
     classify_events,
     detect_events,
+    events_dataset,
+    events_table,
 )
-from slipwave.events.steps import (
-    STEP_COLUMNS,
-    despike,
-    edge_jumps,
-    fall_candidates,
-    load_drops,
-    noise_level,
-    refine_step,
-)
+from slipwave.events.steps import STEP_COLUMNS, despike, edge_jumps, load_drops, noise_level
 from slipwave.events.summary import (
     PHASES,
-    events_dataset,
     friction_ratio,
+    load_ratio,
     normal_loading_end,
     phase_durations,
     segment_phases,
@@ -38,13 +40,13 @@ __all__ = [
     "detect_events",
     "edge_jumps",
     "events_dataset",
-    "fall_candidates",
+    "events_table",
     "friction_ratio",
     "load_drops",
+    "load_ratio",
     "noise_level",
     "normal_loading_end",
     "phase_durations",
-    "refine_step",
     "segment_phases",
     "summary_row",
     "wave_counts",

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from slipwave.defaults import MAX_DURATION_S, MAX_SPIKE, MIN_ASYMMETRY, THRESHOLD
 from slipwave.errors import SlipwaveError
 
 STEP_COLUMNS = ("i_start", "t_start", "i_end", "t_end", "peak", "trough", "drop", "duration")
@@ -67,7 +68,7 @@ def noise_level(values: np.ndarray) -> float:
     return float(sigma)
 
 
-def despike(values: np.ndarray, max_spike: int = 2) -> np.ndarray:
+def despike(values: np.ndarray, max_spike: int = MAX_SPIKE) -> np.ndarray:
     """Medians of consecutive blocks of ``2 * max_spike + 1`` samples.
 
     A spike of up to ``max_spike`` samples that comes back to the level it
@@ -106,7 +107,7 @@ def fall_candidates(
     *,
     block: int,
     max_duration: int,
-    min_asymmetry: float = 3.0,
+    min_asymmetry: float = MIN_ASYMMETRY,
 ) -> np.ndarray:
     """Coarse falls of a despiked signal: (peak sample, trough sample) pairs.
 
@@ -299,7 +300,7 @@ def refine_step(
     *,
     low: int,
     high: int,
-    max_spike: int = 2,
+    max_spike: int = MAX_SPIKE,
 ) -> tuple[int, int, float, float]:
     """Onset and end of one fall on the full-rate samples.
 
@@ -451,10 +452,10 @@ def load_drops(
     load: np.ndarray,
     *,
     min_drop: float | None = None,
-    threshold: float = 8.0,
-    max_spike: int = 2,
-    max_duration: float | None = None,
-    min_asymmetry: float = 3.0,
+    threshold: float = THRESHOLD,
+    max_spike: int = MAX_SPIKE,
+    max_duration: float | None = MAX_DURATION_S,
+    min_asymmetry: float = MIN_ASYMMETRY,
 ) -> pd.DataFrame:
     """Drops of a load-like signal: one row per fast decrease.
 
@@ -556,10 +557,10 @@ def edge_jumps(
     *,
     at: pd.DataFrame | None = None,
     min_jump: float | None = None,
-    threshold: float = 8.0,
-    max_spike: int = 2,
-    max_duration: float | None = None,
-    min_asymmetry: float = 3.0,
+    threshold: float = THRESHOLD,
+    max_spike: int = MAX_SPIKE,
+    max_duration: float | None = MAX_DURATION_S,
+    min_asymmetry: float = MIN_ASYMMETRY,
 ) -> pd.DataFrame:
     """Steps of a displacement signal (DG, DD), of either sign.
 

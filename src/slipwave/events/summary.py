@@ -1,4 +1,4 @@
-"""What the events say about a test: phases, friction ratios, wave counts."""
+"""The summary stage: what the events say about a test (phases, T/|N|, wave counts)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,40 @@ import pandas as pd
 import xarray as xr
 from scipy import stats
 
-from slipwave.errors import SlipwaveError
+from slipwave.errors import SlipwaveError, warning_lines
 
 PHASES = ("normal_loading", "stick", "partial_slip", "gross_slip")
 """Phase labels of :func:`segment_phases`, in the order of a test."""
 
 KINDS = ("partial_slip", "gross_slip")
+
+
+def load_ratio(recording: xr.Dataset, *, min_fraction: float = 0.05) -> xr.DataArray:
+    """T/|N|, the apparent friction ratio, along the recording.
+
+    Parameters
+    ----------
+    recording
+        A Dataset from :func:`slipwave.io.read_acquisition`.
+    min_fraction
+        Where |N| is below this fraction of its maximum (the start of normal
+        loading) the ratio is meaningless and set to NaN.
+
+    Examples
+    --------
+    The first sample, at |N| = 1 N < 5 % of 85 N, is masked:
+
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"T": ("time", [0.0, 40.0, 85.0]), "N": ("time", [-1.0, -80.0, -85.0])})
+    >>> load_ratio(ds).values.round(2).tolist()
+    [nan, 0.5, 1.0]
+
+    """
+    compressive = abs(recording["N"])
+    floor = min_fraction * float(compressive.max(skipna=True))
+    ratio = (recording["T"] / compressive).where(compressive > floor)
+    ratio.attrs = {"units": "1", "long_name": "T/|N|, tangential over compressive normal load"}
+    return ratio.rename("T_over_N")
 
 
 def normal_loading_end(recording: xr.Dataset, *, plateau_fraction: float = 0.98) -> int:
@@ -160,36 +188,11 @@ def summary_row(test_id: str, dataset: xr.Dataset) -> dict[str, object]:
     Friction ratios at gross slips (mean, std, confidence interval), wave
     counts, time spent in each phase, warnings.
     """
-    kinds = pd.DataFrame({"kind": dataset["kind"].values.astype(str)})
     row: dict[str, object] = {"test_id": test_id}
-    row.update({f"{k}_waves": v for k, v in wave_counts(kinds).items()})
+    row.update({f"{k}_waves": v for k, v in wave_counts(dataset).items()})
     for name in ("static", "dynamic"):
         for key in ("mean", "std", "ci_low", "ci_high"):
             row[f"{name}_ratio_{key}"] = float(dataset[f"{name}_{key}"])
     row.update({f"{k}_s": v for k, v in phase_durations(dataset["phase"]).items()})
-    row["warnings"] = " | ".join(filter(None, str(dataset.attrs.get("warnings", "")).split("\n")))
+    row["warnings"] = " | ".join(warning_lines(dataset.attrs))
     return row
-
-
-def events_dataset(events: pd.DataFrame, phase: xr.DataArray) -> xr.Dataset:
-    """Events (along ``event``), phases (along ``time``) and friction ratios in one Dataset.
-
-    Columns become variables with CF ``units`` and ``long_name``; the
-    detection's noise levels, thresholds and warnings become attributes.
-    """
-    from slipwave.events.slips import EVENT_COLUMNS, EVENT_DESCRIPTIONS, EVENT_UNITS
-
-    data = {}
-    for column in EVENT_COLUMNS:
-        attrs = {"long_name": EVENT_DESCRIPTIONS[column]}
-        if column in EVENT_UNITS:
-            attrs["units"] = EVENT_UNITS[column]
-        values = events[column].to_numpy()
-        data[column] = ("event", values.astype(str) if values.dtype == object else values, attrs)
-    ratio = friction_ratio(events).rename({"time": "slip_time"})
-    dataset = xr.Dataset(data, coords={"event": np.arange(len(events))})
-    dataset = xr.merge([dataset, phase.to_dataset(), ratio], combine_attrs="override")
-    attrs = {str(k): v for k, v in events.attrs.items() if k != "warnings"}
-    dataset.attrs = {**attrs, "warnings": "\n".join(events.attrs.get("warnings", [])),
-                     **wave_counts(events)}
-    return dataset

@@ -4,18 +4,26 @@ Plane-strain linear elastic slab, quasi-static loading, unilateral contact
 with Coulomb friction (static and dynamic coefficients), followed increment
 by increment along the bench's load path.
 
->>> from slipwave.solver import Slab, Coulomb, LoadPath, simulate, classify
+>>> from slipwave.solver import Slab, Coulomb, LoadPath, simulate, describe_behaviour
 >>> ds = simulate(Slab(elements=40), Coulomb(fs=1.0), LoadPath())
->>> classify(ds).sweep
+>>> describe_behaviour(ds).sweep
 'right_to_left'
 """
 
-from slipwave.solver.classify import Behaviour, classify
+from slipwave.solver.behaviour import Behaviour, describe_behaviour
 from slipwave.solver.contact import Body, Control
 from slipwave.solver.simulate import Coulomb, LoadPath, simulate
 from slipwave.solver.slab import Condensed, Slab, condense
 
 __all__ = [
-    "Behaviour", "Body", "Condensed", "Control", "Coulomb", "LoadPath", "Slab", "classify",
-    "condense", "simulate",
+    "Behaviour",
+    "Body",
+    "Condensed",
+    "Control",
+    "Coulomb",
+    "LoadPath",
+    "Slab",
+    "condense",
+    "describe_behaviour",
+    "simulate",
 ]

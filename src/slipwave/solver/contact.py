@@ -33,6 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.lapack import dgetrf, dgetrs
 
+from slipwave.errors import SlipwaveError
+
 OPEN, STICK, SLIP = 0, 1, 2
 
 _MAX_ITERATIONS = 60
@@ -62,7 +64,7 @@ class Control:
 
     def __post_init__(self) -> None:
         if (self.dx is None) == (self.T is None) or (self.dy is None) == (self.N is None):
-            raise ValueError("give exactly one of dx/T and one of dy/N")
+            raise SlipwaveError("give exactly one of dx/T and one of dy/N")
 
 
 @dataclass
@@ -104,7 +106,7 @@ class Body:
         self.K = np.ascontiguousarray(stiffness, dtype=np.float64)
         self.n = initial_gap.size
         if self.K.shape != (2 * self.n, 2 * self.n):
-            raise ValueError("stiffness must be (2n, 2n) for n contact nodes")
+            raise SlipwaveError("stiffness must be (2n, 2n) for n contact nodes")
         self.g0 = np.asarray(initial_gap, dtype=np.float64)
         self.ix = np.arange(self.n)
         self.iy = self.n + self.ix

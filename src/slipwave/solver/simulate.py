@@ -9,8 +9,8 @@ import numpy as np
 import xarray as xr
 
 from slipwave import __version__
+from slipwave.defaults import CONVENTIONS, NORMAL_LOAD_N, TANGENTIAL_STEP_N
 from slipwave.errors import SlipwaveError, SolverError
-from slipwave.io import CONVENTIONS
 from slipwave.solver.contact import OPEN, Body, Control, Increment, NotConverged
 from slipwave.solver.slab import Condensed, Slab, condense
 
@@ -94,8 +94,8 @@ class LoadPath:
 
     """
 
-    normal_load: float = 76.0
-    tangential_step: float = 2.0
+    normal_load: float = NORMAL_LOAD_N
+    tangential_step: float = TANGENTIAL_STEP_N
     normal_steps: int = 5
     normal_control: Literal["displacement", "force"] = "displacement"
     max_travel: float | None = None

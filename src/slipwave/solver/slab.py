@@ -11,9 +11,10 @@ The stiffness is condensed onto the contact nodes (static condensation, the
 Schur complement of the interior), so that each load increment is a small
 dense problem; the lateral displacements of the slab's faces at the sensor
 height follow from the contact displacements through a 2 x 2n matrix.
-Condensed matrices are cached in memory and on disk (see :func:`cache_dir`);
-they are computed for E = 1 and scaled, so a sweep over E or friction does
-not rebuild them.
+Condensed matrices are computed for E = 1 and scaled, so a sweep over E or
+friction does not rebuild them; they are kept in memory, and a caller may hand
+in a store that keeps them on disk (:class:`slipwave.cache.DiskCache`): the
+solver itself reads and writes no file.
 """
 
 from __future__ import annotations
@@ -21,11 +22,10 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
-import os
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,8 +33,15 @@ import scipy.sparse.linalg as spla
 from skfem import Basis, BilinearForm, ElementQuad1, ElementVector, MeshQuad, asm
 from skfem.helpers import ddot, div, sym_grad
 
+from slipwave.defaults import (
+    CONTACT_ELEMENTS,
+    CONTACT_LENGTH_MM,
+    POISSON_RATIO,
+    SLAB_HEIGHT_MM,
+    SLAB_WIDTH_MM,
+    YOUNGS_MODULUS_MPA,
+)
 from slipwave.errors import SlipwaveError
-from slipwave.io import atomic_output
 
 SENSOR_HEIGHT = 5.0
 """Height (mm) above the contact of the DG and DD displacement sensors."""
@@ -71,12 +78,12 @@ class Slab:
 
     """
 
-    length: float = 80.0
-    height: float = 40.0
-    width: float = 10.0
-    youngs_modulus: float = 7.0
-    poisson_ratio: float = 0.48
-    elements: int = 160
+    length: float = CONTACT_LENGTH_MM
+    height: float = SLAB_HEIGHT_MM
+    width: float = SLAB_WIDTH_MM
+    youngs_modulus: float = YOUNGS_MODULUS_MPA
+    poisson_ratio: float = POISSON_RATIO
+    elements: int = CONTACT_ELEMENTS
     holder: Literal["clamped", "free"] = "clamped"
     profile: Callable[[np.ndarray], np.ndarray] | None = field(default=None, compare=False)
     growth: float = 1.15
@@ -152,16 +159,34 @@ class Condensed:
     compliance: np.ndarray | None
 
 
-def cache_dir() -> Path:
-    """Folder of the on-disk cache: ``$SLIPWAVE_CACHE_DIR``, else ``$XDG_CACHE_HOME/slipwave``."""
-    explicit = os.environ.get("SLIPWAVE_CACHE_DIR")
-    if explicit:
-        return Path(explicit)
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "slipwave"
+class CondensationStore(Protocol):
+    """Where condensed matrices outlive the process (e.g. :class:`slipwave.cache.DiskCache`).
+
+    The solver hands it the key of a geometry (:func:`geometry_key`) and the
+    matrices for E = 1; it does no file I/O itself.
+    """
+
+    def load(self, key: str) -> Condensed | None:
+        """The matrices stored under ``key``, or ``None``."""
+
+    def save(self, key: str, condensed: Condensed) -> None:
+        """Keep ``condensed`` under ``key``."""
 
 
-def _cache_key(slab: Slab) -> str:
+def geometry_key(slab: Slab) -> str:
+    """A key naming the slab's geometry and mesh (not E, width, profile or friction).
+
+    Parameters
+    ----------
+    slab
+        The slab.
+
+    Returns
+    -------
+    str
+        24 hexadecimal digits, changed whenever the condensation would change.
+
+    """
     fields = (
         _CACHE_VERSION, slab.length, slab.height, slab.poisson_ratio, slab.elements,
         slab.holder, slab.growth, slab.max_aspect, SENSOR_HEIGHT,
@@ -169,39 +194,51 @@ def _cache_key(slab: Slab) -> str:
     return hashlib.sha256(repr(fields).encode()).hexdigest()[:24]
 
 
-def condense(slab: Slab, *, use_cache: bool = True) -> Condensed:
-    """Condensed stiffness and sensor matrix of a slab, from cache when possible.
+_MEMORY: OrderedDict[str, Condensed] = OrderedDict()
+_MEMORY_SIZE = 32  # geometries kept in memory (a map's 12 H/L values fit)
 
-    The geometry (not E, width, profile or friction) is the cache key.
+
+def condense(slab: Slab, *, store: CondensationStore | None = None) -> Condensed:
+    """Condensed stiffness and sensor matrix of a slab.
+
+    The matrices are computed for E = 1 and scaled, so a sweep over E or
+    friction does not rebuild them; the last 32 geometries are kept in
+    memory, and ``store`` keeps them across processes.
+
+    Parameters
+    ----------
+    slab
+        The slab.
+    store
+        Looked up on a memory miss and given what is assembled.
+
+    Returns
+    -------
+    Condensed
+        The slab's condensed matrices for its Young's modulus.
+
     """
     geometry = dataclasses.replace(slab, youngs_modulus=1.0, width=1.0, profile=None)
-    unit = _condensed_unit(geometry) if use_cache else assemble_condensed(geometry)
+    key = geometry_key(geometry)
+    unit = _MEMORY.get(key)
+    if unit is None and store is not None:
+        unit = store.load(key)
+    if unit is None:
+        unit = assemble_condensed(geometry)
+        if store is not None:
+            store.save(key, unit)
+    _MEMORY[key] = unit
+    _MEMORY.move_to_end(key)
+    while len(_MEMORY) > _MEMORY_SIZE:
+        _MEMORY.popitem(last=False)
     E = slab.youngs_modulus
     compliance = None if unit.compliance is None else unit.compliance / E
     return Condensed(unit.stiffness * E, unit.sensors, compliance)
 
 
-@functools.lru_cache(maxsize=32)
-def _condensed_unit(slab: Slab) -> Condensed:
-    path = cache_dir() / f"condensed-{_cache_key(slab)}.npz"
-    if path.exists():
-        try:
-            with np.load(path) as stored:
-                compliance = stored.get("compliance")
-                return Condensed(stored["stiffness"], stored["sensors"], compliance)
-        except (OSError, ValueError, KeyError):
-            pass  # a damaged cache file is rebuilt
-    result = assemble_condensed(slab)
-    try:
-        with atomic_output(path) as temporary, open(temporary, "wb") as handle:
-            if result.compliance is None:
-                np.savez(handle, stiffness=result.stiffness, sensors=result.sensors)
-            else:
-                np.savez(handle, stiffness=result.stiffness, sensors=result.sensors,
-                         compliance=result.compliance)
-    except OSError:
-        pass  # a read-only cache only costs time
-    return result
+def forget_condensed() -> None:
+    """Empty the in-memory cache of :func:`condense` (for tests and benchmarks)."""
+    _MEMORY.clear()
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
+from slipwave.defaults import BAND_MM
 from slipwave.errors import SlipwaveError
 from slipwave.video.frames import Frame
 
@@ -138,7 +139,7 @@ def find_geometry(frames: Iterable[Frame], length: float, *, count: int = 300) -
 def kymograph(
     frames: Iterable[Frame],
     geometry: Geometry,
-    band_mm: tuple[float, float] = (0.5, 2.0),
+    band_mm: tuple[float, float] = BAND_MM,
     *,
     reference: np.ndarray | None = None,
 ) -> xr.Dataset:

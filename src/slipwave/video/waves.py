@@ -1,17 +1,15 @@
-"""Sliding waves in a kymograph, camera and card clocks, and waves paired with load events.
+"""The waves stage: sliding waves tracked in a kymograph.
 
 A wave shows as a front of fast change crossing the band above the interface:
 :func:`track_waves` finds the frames where the band changes much more than it
 does while the contact sticks, gives every position the time the change reached
 it (:func:`arrivals`), follows the front from where it started for as long as
 the arrivals go on in time (:func:`sweep`) and fits its speed.
-:func:`align_clocks` maps camera time to acquisition time; :func:`fuse` gives
-each load event its wave.
+Clock alignment is :mod:`slipwave.video.clock`, pairing with load events
+:mod:`slipwave.video.fuse`.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -290,146 +288,3 @@ def _front_speed(positions: np.ndarray, arrival: np.ndarray) -> float:
     if np.ptp(arrival) == 0:
         return np.nan
     return float(abs(stats.theilslopes(positions, arrival)[0]))
-
-
-@dataclass(frozen=True)
-class ClockFit:
-    """Acquisition time = ``offset + rate * camera time``; how it was found and how well."""
-
-    offset: float
-    rate: float
-    residual: float
-    method: str
-    pairs: int
-
-    def acquisition_time(self, camera_time: np.ndarray | float) -> np.ndarray:
-        """The acquisition-card time of camera times."""
-        return self.offset + self.rate * np.asarray(camera_time, dtype=float)
-
-
-def sync_offset(kymo: xr.Dataset, sync_time: float) -> float | None:
-    """Clock offset from the sync LED lit at acquisition time ``sync_time``, if it shows.
-
-    The first lit frame comes at most one frame after the LED lit up: the
-    offset is taken half a frame before it. ``None`` when no frame is lit.
-    """
-    level = kymo["sync"].values.astype(float)
-    lit = level > 0.5 * (level.max() + np.median(level))
-    if level.max() - np.median(level) < 0.2 or not lit.any():
-        return None
-    time = kymo["time"].values.astype(float)
-    period = float(np.median(np.diff(time)))
-    return float(sync_time - time[np.argmax(lit)] + 0.5 * period)
-
-
-def correlation_offset(kymo: xr.Dataset, recording: xr.Dataset, *,
-                       max_offset: float = 60.0) -> float:
-    """Clock offset that best lines up the video's activity with the fall rate of T.
-
-    Cross-correlates the band's total change per frame with ``max(-dT/dt, 0)``
-    sampled on the frames, over offsets up to ``max_offset`` (s) either way.
-    """
-    time = kymo["time"].values.astype(float)
-    period = float(np.median(np.diff(time)))
-    activity = change(kymo).values.sum(axis=1)
-    activity = activity - activity.mean()
-    card = recording["time"].values.astype(float)
-    falling = np.maximum(-np.gradient(recording["T"].values.astype(float), card), 0.0)
-    lags = np.arange(-max_offset, max_offset + period, period)
-    grid = time[0] + np.arange(time.size) * period
-    best, score = 0.0, -np.inf
-    for lag in lags:
-        sampled = np.interp(grid + lag, card, falling, left=0.0, right=0.0)
-        value = float(activity @ (sampled - sampled.mean()))
-        if value > score:
-            best, score = float(lag), value
-    return best
-
-
-def align_clocks(
-    waves: pd.DataFrame,
-    kymo: xr.Dataset,
-    recording: xr.Dataset,
-    events: pd.DataFrame,
-    *,
-    sync_time: float | None = None,
-    tolerance: float = 0.3,
-) -> ClockFit:
-    """Offset and rate between the camera's and the acquisition card's clocks.
-
-    A first offset comes from the sync LED (``sync_time``, by default the
-    recording's ``sync_time_s`` attribute) or, without one, from
-    :func:`correlation_offset`. Then every wave whose start falls within
-    ``tolerance`` (s) of a load event's onset is paired with it and a straight
-    line (acquisition = offset + rate x camera) is fitted to the pairs
-    (Theil-Sen: a wrong pair does not tilt it); the residual is the robust
-    standard deviation (1.4826 MAD) of its misfit (wave starts are known to a
-    frame).
-    """
-    if sync_time is None and "sync_time_s" in recording.attrs:
-        sync_time = float(recording.attrs["sync_time_s"])
-    first = sync_offset(kymo, sync_time) if sync_time is not None else None
-    method = "sync LED"
-    if first is None:
-        first, method = correlation_offset(kymo, recording), "cross-correlation"
-    camera = waves["t_start"].to_numpy(dtype=float)
-    onsets = events["t_start"].to_numpy(dtype=float) if len(events) else np.array([])
-    fit = ClockFit(first, 1.0, np.nan, method, 0)
-    for _ in range(2):  # pair, fit, pair again with the better clock
-        if camera.size == 0 or onsets.size == 0:
-            return fit
-        mapped = fit.acquisition_time(camera)
-        nearest = np.abs(mapped[:, None] - onsets[None, :]).argmin(axis=1)
-        close = np.abs(mapped - onsets[nearest]) <= tolerance
-        if close.sum() < 3:
-            return fit
-        paired = onsets[nearest[close]]
-        rate = float(stats.theilslopes(paired, camera[close])[0])
-        offset = float(np.median(paired - rate * camera[close]))
-        misfit = onsets[nearest[close]] - (offset + rate * camera[close])
-        spread = 1.4826 * float(np.median(np.abs(misfit - np.median(misfit))))
-        fit = ClockFit(float(offset), float(rate), spread,
-                       f"{method}, then {int(close.sum())} wave/event pairs",
-                       int(close.sum()))
-    return fit
-
-
-def fuse(events: pd.DataFrame, waves: pd.DataFrame, clock: ClockFit, *,
-         tolerance: float = 0.3) -> pd.DataFrame:
-    """Each load event with its wave; waves without an event and events without one kept.
-
-    Waves are put on the card's clock, then each event takes the nearest wave
-    starting within ``tolerance`` (s) of its onset (each wave once). Columns
-    ``wave_*`` describe the wave; ``video_kind`` is its kind from the swept
-    extent (none for an ``unresolved`` wave) and ``kind_agrees`` compares it
-    with the event's; ``source`` says
-    ``both``, ``load`` (no wave seen) or ``video`` (a wave without a T drop).
-    """
-    starts = clock.acquisition_time(waves["t_start"].to_numpy(dtype=float))
-    taken = np.zeros(len(waves), dtype=bool)
-    chosen = np.full(len(events), -1)
-    onsets = events["t_start"].to_numpy(dtype=float)
-    for k in np.argsort(onsets):
-        gap = np.abs(starts - onsets[k])
-        gap[taken] = np.inf
-        if gap.size and gap.min() <= tolerance:
-            chosen[k] = int(np.argmin(gap))
-            taken[chosen[k]] = True
-    described = waves[list(WAVE_COLUMNS)].assign(
-        t_start=starts, t_end=clock.acquisition_time(waves["t_end"].to_numpy(dtype=float)))
-    columns = {f"wave_{c}": c for c in WAVE_COLUMNS}
-    fused = events.reset_index(drop=True).copy()
-    for name, column in columns.items():
-        values = described[column].to_numpy()
-        fused[name] = [values[i] if i >= 0 else None for i in chosen]
-    fused["source"] = np.where(chosen >= 0, "both", "load")
-    alone = described[~taken].rename(columns={c: name for name, c in columns.items()})
-    alone = alone.assign(kind="none", t_start=alone["wave_t_start"], source="video")
-    fused = pd.concat([fused, alone], ignore_index=True).sort_values("t_start",
-                                                                      ignore_index=True)
-    video_kind = fused["wave_kind"].map({"gross": "gross_slip", "partial": "partial_slip"})
-    fused["video_kind"] = video_kind
-    # no verdict where the video has no kind (no wave, or one too fast to follow)
-    fused["kind_agrees"] = (fused["kind"] == video_kind).where(
-        (fused["source"] == "both") & video_kind.notna())
-    return fused

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
-from slipwave.io import CHANNEL_ATTRS, CHANNELS, CONVENTIONS
+from slipwave.io.channels import CHANNEL_ATTRS, CHANNELS
 
 CARD_SIGN = {"T": 1.0, "N": -1.0, "DG": 1.0, "DD": 1.0, "DT": 1.0}
 """Signs of the card's channels relative to the simulation: N reads negative in compression."""

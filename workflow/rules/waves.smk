@@ -1,21 +1,3 @@
-rule kymograph:
-    """The band above the interface along the contact, frame by frame, from the test's video."""
-    input:
-        frames=lambda wildcards: tests.loc[wildcards.test_id, "frames"],
-    output:
-        "results/{test_id}/kymograph.nc",
-    log:
-        "results/logs/kymograph/{test_id}.log",
-    params:
-        length=config.get("video", {}).get("length_mm", 80.0),
-        band=" ".join(str(b) for b in config.get("video", {}).get("band_mm", [0.5, 2.0])),
-    conda:
-        "../envs/slipwave.yaml"
-    shell:
-        "slipwave kymograph {input.frames:q} -o {output:q} --length {params.length} "
-        "--band {params.band} > {log:q} 2>&1"
-
-
 rule waves:
     """Sliding waves of the kymograph, the camera clock, and the events with their waves."""
     input:

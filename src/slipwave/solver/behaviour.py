@@ -104,13 +104,13 @@ def _region(mask: np.ndarray, x: np.ndarray) -> str:
     return "left" if centre < -third else "right" if centre > third else "interior"
 
 
-def classify(ds: xr.Dataset) -> Behaviour:
+def describe_behaviour(ds: xr.Dataset) -> Behaviour:
     """Classify the interface behaviour of a :func:`~slipwave.solver.simulate` result.
 
     Examples
     --------
     >>> from slipwave.solver import Slab, Coulomb, LoadPath, simulate
-    >>> behaviour = classify(simulate(Slab(elements=40), Coulomb(fs=1.0), LoadPath()))
+    >>> behaviour = describe_behaviour(simulate(Slab(elements=40), Coulomb(fs=1.0), LoadPath()))
     >>> behaviour.first_opening, behaviour.first_slip
     ('right', 'right')
 

@@ -1,4 +1,4 @@
-"""Acquisition files in, CF netCDF out.
+"""The ingest stage: acquisition-card CSVs read into a Dataset in N, mm and s.
 
 The canonical acquisition CSV (documented in ``raw_data/README.md``)::
 
@@ -12,9 +12,7 @@ The canonical acquisition CSV (documented in ``raw_data/README.md``)::
 :func:`read_acquisition` reads it and the variants acquisition cards write
 (``;`` or tab separators, decimal comma, CRLF, Latin-1, units in brackets,
 parentheses or a second header row, vendor column names) into an
-:class:`xarray.Dataset` in mm, N and s. :func:`write_dataset` and
-:func:`read_dataset` store datasets as compressed netCDF4, written whole or
-not at all.
+:class:`xarray.Dataset` in mm, N and s.
 """
 
 from __future__ import annotations
@@ -23,45 +21,22 @@ import contextlib
 import functools
 import hashlib
 import io
-import os
 import re
-import tempfile
 import unicodedata
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import pint
 import xarray as xr
 
-from slipwave.errors import AcquisitionError, SlipwaveError
-
-CHANNELS: tuple[str, ...] = ("T", "N", "DG", "DD", "DT")
-"""The recorded channels, in file order; ``time`` is the dimension."""
-
-REQUIRED_CHANNELS: tuple[str, ...] = ("T", "N")
-
-CHANNEL_ATTRS: dict[str, dict[str, str]] = {
-    "time": {"units": "s", "long_name": "time since the start of the acquisition", "axis": "T"},
-    "T": {"units": "N", "long_name": "tangential load"},
-    "N": {"units": "N", "long_name": "normal load"},
-    "DG": {"units": "mm", "long_name": "left-edge lateral displacement of the slab"},
-    "DD": {"units": "mm", "long_name": "right-edge lateral displacement of the slab"},
-    "DT": {"units": "mm", "long_name": "flat displacement (imposed travel)"},
-}
-
-CONVENTIONS = "CF-1.12"
-
-# Reader-made global attributes: a metadata key with one of these names is kept
-# under ``meta_<key>`` so that the file cannot overwrite provenance.
-_RESERVED_ATTRS = frozenset(
-    {"Conventions", "source", "source_sha256", "warnings", "missing_channels",
-     "source_format", "history"}
-)
+from slipwave.defaults import CONVENTIONS
+from slipwave.errors import AcquisitionError
+from slipwave.io.channels import CHANNEL_ATTRS, CHANNELS, REQUIRED_CHANNELS, RESERVED_ATTRS
 
 # Column names understood without a ``columns`` mapping. Short names are
 # case-sensitive (``t`` is time, ``T`` the tangential load); longer ones are
@@ -162,7 +137,7 @@ def _attr_key(key: str) -> str:
     cleaned = re.sub(r"\W+", "_", _fold(key)).strip("_") or "key"
     if cleaned[0].isdigit():
         cleaned = "k_" + cleaned
-    return f"meta_{cleaned}" if cleaned in _RESERVED_ATTRS else cleaned
+    return f"meta_{cleaned}" if cleaned in RESERVED_ATTRS else cleaned
 
 
 def _detect_separator(header: str) -> str:
@@ -630,140 +605,3 @@ def _note_normal_sign(normal: xr.Variable) -> None:
     normal.attrs["compression_sign"] = sign
 
 
-_UMASK = os.umask(0)
-os.umask(_UMASK)
-
-
-@contextlib.contextmanager
-def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
-    """Give a temporary path beside ``path`` and move it into place on success.
-
-    The destination is written whole or not at all: a failure leaves any
-    previous file untouched and no partial file behind.
-    """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    os.close(fd)
-    temporary = Path(name)
-    try:
-        yield temporary
-        temporary.chmod(0o666 & ~_UMASK)  # mkstemp makes 0600; outputs follow the umask
-        os.replace(temporary, target)
-    finally:
-        temporary.unlink(missing_ok=True)
-
-
-def _netcdf_attr(value: Any) -> Any:
-    if isinstance(value, bool | np.bool_):
-        return int(value)
-    if isinstance(value, str | int | float | np.integer | np.floating):
-        return value
-    if isinstance(value, list | tuple | np.ndarray) and all(
-        isinstance(v, int | float | np.integer | np.floating) for v in value
-    ):
-        return np.asarray(value)
-    return str(value)
-
-
-def write_dataset(ds: xr.Dataset, path: str | PathLike[str]) -> Path:
-    """Save a Dataset as compressed netCDF4, whole or not at all.
-
-    Attributes netCDF cannot hold (booleans, None, mappings) are stored as
-    integers or text.
-
-    Returns
-    -------
-    Path
-        The written file.
-
-    """
-    out = ds.copy()
-    out.attrs = {k: _netcdf_attr(v) for k, v in ds.attrs.items() if v is not None}
-    for name in out.variables:
-        out[name].attrs = {
-            k: _netcdf_attr(v) for k, v in ds[name].attrs.items() if v is not None
-        }
-    encoding: dict[str, dict[str, Any]] = {}
-    for name, variable in out.variables.items():
-        if variable.dtype.kind in "fiu":
-            encoding[str(name)] = {"zlib": True, "complevel": 4, "shuffle": True}
-            if name in out.coords:
-                encoding[str(name)]["_FillValue"] = None
-    target = Path(path)
-    try:
-        with atomic_output(target) as temporary:
-            out.to_netcdf(temporary, engine="netcdf4", format="NETCDF4", encoding=encoding)
-    except OSError as err:
-        raise SlipwaveError(f"{target}: cannot be written: {err}") from err
-    return target
-
-
-def read_dataset(path: str | PathLike[str]) -> xr.Dataset:
-    """Load a Dataset written by :func:`write_dataset` fully into memory."""
-    try:
-        return xr.load_dataset(path, engine="netcdf4", decode_timedelta=False)
-    except (OSError, ValueError) as err:
-        raise SlipwaveError(f"{path}: cannot be read as netCDF: {err}") from err
-
-
-_VENDOR_HEADERS = {
-    "time": "Temps (s)",
-    "T": "Effort tangentiel (N)",
-    "N": "Effort normal (N)",
-    "DG": "Déplacement gauche (mm)",
-    "DD": "Déplacement droit (mm)",
-    "DT": "Déplacement plan (mm)",
-}
-
-
-def write_acquisition(
-    ds: xr.Dataset,
-    path: str | PathLike[str],
-    *,
-    flavour: Literal["canonical", "vendor"] = "canonical",
-    float_format: str = "%.6g",
-) -> Path:
-    """Write a recording as an acquisition CSV that :func:`read_acquisition` reads.
-
-    Parameters
-    ----------
-    ds
-        Dimension ``time`` (s) and any of the channels ``T, N, DG, DD, DT``.
-        Its simple global attributes become ``# key: value`` metadata lines.
-    path
-        Destination, written whole or not at all.
-    flavour
-        ``canonical``: comma separated, UTF-8, ``name [unit]`` headers, LF.
-        ``vendor``: what a French acquisition card writes: ``;`` separator,
-        decimal comma, Latin-1 headers ``Déplacement gauche (mm)``, CRLF and
-        a trailing separator on every line.
-    float_format
-        printf format of the values.
-
-    """
-    channels = [c for c in CHANNELS if c in ds.data_vars]
-    frame = pd.DataFrame({"time": ds["time"].values, **{c: ds[c].values for c in channels}})
-    skip = _RESERVED_ATTRS | {"comment"}
-    metadata = [
-        f"# {key}: {value}"
-        for key, value in ds.attrs.items()
-        if key not in skip and isinstance(value, str | int | float | np.integer | np.floating)
-        and "\n" not in str(value)
-    ]
-    if flavour == "canonical":
-        frame.columns = ["time [s]", *(f"{c} [{CHANNEL_ATTRS[c]['units']}]" for c in channels)]
-        body = frame.to_csv(index=False, float_format=float_format, lineterminator="\n")
-        text, encoding = "\n".join([*metadata, body]), "utf-8"
-    elif flavour == "vendor":
-        frame.columns = [_VENDOR_HEADERS[c] for c in frame.columns]
-        frame[""] = ""  # the trailing separator vendor cards write
-        body = frame.to_csv(
-            index=False, sep=";", decimal=",", float_format=float_format, lineterminator="\r\n"
-        )
-        text, encoding = "\r\n".join([*metadata, body]), "latin-1"
-    else:
-        raise SlipwaveError(f"unknown CSV flavour {flavour!r}: canonical or vendor")
-    with atomic_output(path) as temporary:
-        temporary.write_bytes(text.encode(encoding))
-    return Path(path)

@@ -1,4 +1,4 @@
-"""Slip events of a friction test: T drops classified by what the edges did.
+"""The detect stage: slip events of a friction test, T drops classified by what the edges did.
 
 A gross slip is a wave that crossed the whole contact: the T drop comes with
 a jump of DG, the far (left) edge, at least as large as the jump of DD, the
@@ -15,8 +15,10 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from slipwave.defaults import GROSS_EDGE_RATIO, MAX_DURATION_S, MAX_SPIKE, MIN_ASYMMETRY, THRESHOLD
 from slipwave.errors import SlipwaveError
 from slipwave.events.steps import edge_jumps, load_drops, window_median
+from slipwave.events.summary import friction_ratio, wave_counts
 
 EVENT_COLUMNS = (
     "kind", "i_start", "t_start", "i_end", "t_end", "duration", "T_before", "T_after",
@@ -56,7 +58,7 @@ def classify_events(
     drops: pd.DataFrame,
     jumps: Mapping[str, pd.DataFrame],
     *,
-    gross_edge_ratio: float = 0.9,
+    gross_edge_ratio: float = GROSS_EDGE_RATIO,
     tolerance: float | None = None,
     resolution: float | None = None,
 ) -> pd.DataFrame:
@@ -162,11 +164,11 @@ def detect_events(
     *,
     min_drop: float | None = None,
     min_jump: float | None = None,
-    threshold: float = 8.0,
-    max_spike: int = 2,
-    max_duration: float | None = None,
-    min_asymmetry: float = 3.0,
-    gross_edge_ratio: float = 0.9,
+    threshold: float = THRESHOLD,
+    max_spike: int = MAX_SPIKE,
+    max_duration: float | None = MAX_DURATION_S,
+    min_asymmetry: float = MIN_ASYMMETRY,
+    gross_edge_ratio: float = GROSS_EDGE_RATIO,
 ) -> pd.DataFrame:
     """Slip events of a recording: T drops, classified, with loads and edge jumps.
 
@@ -190,7 +192,7 @@ def detect_events(
         :data:`EVENT_DESCRIPTIONS`). ``DG_jump`` and ``DD_jump`` are measured
         across every event (:func:`~slipwave.events.edge_jumps` with ``at``),
         significant or not. ``attrs`` holds
-        ``warnings`` (a list of str), the noise levels and thresholds.
+        ``warnings`` (one per line), the noise levels and thresholds.
 
     Raises
     ------
@@ -199,7 +201,7 @@ def detect_events(
 
     Examples
     --------
-    >>> from slipwave.synthetic import SawtoothBench, sawtooth_recording
+    >>> from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
     >>> events = detect_events(sawtooth_recording(SawtoothBench(), seed=0))
     >>> events["kind"].value_counts().to_dict()
     {'gross_slip': 12, 'partial_slip': 8}
@@ -259,7 +261,7 @@ def detect_events(
         result["edge_ratio"] = result["DG_jump"] / result["DD_jump"]
     result = result.astype({"i_start": np.int64, "i_end": np.int64})
     result.attrs.update(
-        warnings=warnings,
+        warnings="\n".join(warnings),
         T_noise=drops.attrs.get("noise", np.nan),
         min_drop=drops.attrs.get("min_size", np.nan),
         sample_interval=drops.attrs.get("sample_interval", np.nan),
@@ -267,3 +269,72 @@ def detect_events(
         **{f"{c}_min_jump": j.attrs.get("min_size", np.nan) for c, j in jumps.items()},
     )
     return result
+
+
+def events_dataset(events: pd.DataFrame, phase: xr.DataArray) -> xr.Dataset:
+    """Events (along ``event``), phases (along ``time``) and friction ratios in one Dataset.
+
+    Columns become variables with CF ``units`` and ``long_name``; the
+    detection's noise levels, thresholds and warnings become attributes. This
+    is what ``events.nc`` holds; :func:`events_table` reads the events back.
+
+    Parameters
+    ----------
+    events
+        From :func:`detect_events`.
+    phase
+        From :func:`~slipwave.events.summary.segment_phases`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Events, phases, friction ratios (:func:`~slipwave.events.summary.friction_ratio`)
+        and the wave counts as attributes.
+
+    """
+    data = {}
+    for column in EVENT_COLUMNS:
+        attrs = {"long_name": EVENT_DESCRIPTIONS[column]}
+        if column in EVENT_UNITS:
+            attrs["units"] = EVENT_UNITS[column]
+        values = events[column].to_numpy()
+        data[column] = ("event", values.astype(str) if values.dtype == object else values, attrs)
+    ratio = friction_ratio(events).rename({"time": "slip_time"})
+    dataset = xr.Dataset(data, coords={"event": np.arange(len(events))})
+    dataset = xr.merge([dataset, phase.to_dataset(), ratio], combine_attrs="override")
+    attrs = {str(k): v for k, v in events.attrs.items() if k != "warnings"}
+    dataset.attrs = {**attrs, "warnings": events.attrs.get("warnings", ""),
+                     **wave_counts(events)}
+    return dataset
+
+
+def events_table(dataset: xr.Dataset) -> pd.DataFrame:
+    """The events of an :func:`events_dataset` Dataset (``events.nc``) as a table.
+
+    The inverse of :func:`events_dataset` for the events: the one place a
+    stored events file becomes the DataFrame :func:`detect_events` returns.
+
+    Parameters
+    ----------
+    dataset
+        From :func:`events_dataset` (or read back from ``events.nc``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per event, the columns of :data:`EVENT_COLUMNS`; ``attrs``
+        are the dataset's (noise levels, thresholds, ``warnings``, counts).
+
+    Examples
+    --------
+    >>> from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
+    >>> from slipwave.events.summary import segment_phases
+    >>> recording = sawtooth_recording(SawtoothBench(), seed=0)
+    >>> events = detect_events(recording)
+    >>> stored = events_dataset(events, segment_phases(recording, events))
+    >>> events_table(stored).equals(events)
+    True
+    """
+    table = dataset[list(EVENT_COLUMNS)].to_dataframe().reset_index(drop=True)
+    table.attrs = dict(dataset.attrs)
+    return table

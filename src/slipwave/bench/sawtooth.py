@@ -10,12 +10,17 @@ with the event times known.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 
-from slipwave.io import CHANNEL_ATTRS, CONVENTIONS
+from slipwave.defaults import CONTACT_LENGTH_MM, CONVENTIONS, SLAB_HEIGHT_MM, SLAB_WIDTH_MM
+from slipwave.io.card import write_acquisition
+from slipwave.io.channels import CHANNEL_ATTRS
 
 
 @dataclass(frozen=True)
@@ -39,9 +44,9 @@ class SawtoothBench:
     """
 
     test_id: str = "demo"
-    length: float = 80.0
-    height: float = 40.0
-    width: float = 10.0
+    length: float = CONTACT_LENGTH_MM
+    height: float = SLAB_HEIGHT_MM
+    width: float = SLAB_WIDTH_MM
     speed: float = 0.048
     normal_load: float = 85.0
     ratio: float = 1.0
@@ -142,7 +147,7 @@ def sawtooth_recording(bench: SawtoothBench, *, seed: int = 0) -> xr.Dataset:
         "width_mm": bench.width,
         "speed_mm_s": bench.speed,
         "normal_load_n": bench.normal_load,
-        "generator": f"slipwave.synthetic saw-tooth model, ratio {bench.ratio}, seed {seed}",
+        "generator": f"slipwave.bench.sawtooth saw-tooth model, ratio {bench.ratio}, seed {seed}",
         "Conventions": CONVENTIONS,
     }
     return xr.Dataset(
@@ -150,3 +155,37 @@ def sawtooth_recording(bench: SawtoothBench, *, seed: int = 0) -> xr.Dataset:
         coords={"time": ("time", time, CHANNEL_ATTRS["time"])},
         attrs=attrs,
     )
+
+
+SAWTOOTH_CAMPAIGN: tuple[tuple[SawtoothBench, Literal["canonical", "vendor"]], ...] = (
+    (SawtoothBench(test_id="saw_hl050", height=40.0, ratio=1.0), "canonical"),
+    (SawtoothBench(test_id="saw_hl025", height=20.0, ratio=0.9, stiffness=26.0,
+                   gross_drops=(4.0, 6.0, 8.0), partial_drop=2.0), "canonical"),
+    (SawtoothBench(test_id="saw_hl075", height=60.0, ratio=1.1, stiffness=16.0,
+                   gross_drops=(6.0, 10.0, 14.0, 18.0), partial_drop=3.0), "vendor"),
+)
+"""Three saw-tooth tests (H/L 0.5, 0.25, 0.75) and the CSV flavour each is written in."""
+
+
+def write_sawtooth_campaign(folder: str | PathLike[str], *, seed: int = 0) -> list[Path]:
+    """Write the tests of :data:`SAWTOOTH_CAMPAIGN` as acquisition CSVs.
+
+    Parameters
+    ----------
+    folder
+        Where ``<test_id>.csv`` files go.
+    seed
+        Noise seed of the first test; test k uses ``seed + k``.
+
+    Returns
+    -------
+    list of Path
+        The CSVs written.
+
+    """
+    paths = []
+    for k, (bench, flavour) in enumerate(SAWTOOTH_CAMPAIGN):
+        path = Path(folder) / f"{bench.test_id}.csv"
+        write_acquisition(sawtooth_recording(bench, seed=seed + k), path, flavour=flavour)
+        paths.append(path)
+    return paths

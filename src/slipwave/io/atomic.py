@@ -1,0 +1,34 @@
+"""Outputs written whole or not at all."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from os import PathLike
+from pathlib import Path
+
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
+    """Give a temporary path beside ``path`` and move it into place on success.
+
+    The destination is written whole or not at all: a failure leaves any
+    previous file untouched and no partial file behind.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    os.close(fd)
+    temporary = Path(name)
+    try:
+        yield temporary
+        temporary.chmod(0o666 & ~_UMASK)  # mkstemp makes 0600; outputs follow the umask
+        os.replace(temporary, target)
+    finally:
+        temporary.unlink(missing_ok=True)
+

@@ -1,0 +1,16 @@
+rule kymograph:
+    """The band above the interface along the contact, frame by frame, from the test's video."""
+    input:
+        frames=lambda wildcards: test_row(wildcards)["frames"],
+    output:
+        "results/{test_id}/kymograph.nc",
+    log:
+        "results/logs/kymograph/{test_id}.log",
+    params:
+        length=config["video"]["length_mm"],
+        band=config["video"]["band_mm"],
+    conda:
+        "../envs/slipwave.yaml"
+    shell:
+        "slipwave kymograph {input.frames:q} -o {output:q} --length {params.length} "
+        "--band {params.band[0]} {params.band[1]} > {log:q} 2>&1"
