@@ -23,6 +23,7 @@ import scipy.io
 from slipwave.bench.generate import BenchTest, simulate_test
 from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors, clean_signals
 from slipwave.events import detect_events, load_drops
+from targets import check, finish
 
 SAMPLES = 10_000_000
 COLAS = Path(__file__).parents[1].parent / "shared/data/colas2019/k1002Nm_v42.mat"
@@ -43,7 +44,7 @@ def main() -> None:
         timings.append(time.perf_counter() - start)
     best, median = min(timings), float(np.median(timings))
     rate = recording.sizes["time"] / median
-    status = "meets" if rate >= TARGET else "MISSES"
+    status = check("detect_events samples/s", rate, TARGET, at_least=True)
     counts = events["kind"].value_counts().to_dict()
     print(f"detect_events: {recording.sizes['time']:,} samples x 5 channels, {len(events)} "
           f"events {counts}: median {median:.2f} s (best {best:.2f} s) = "
@@ -58,6 +59,7 @@ def main() -> None:
         print(f"load_drops on {COLAS.name}: {force.size:,} samples, {len(drops)} drops in "
               f"{took:.2f} s ({force.size / took / 1e6:.1f} M samples/s, "
               f"{took / max(len(drops), 1) * 1e3:.2f} ms per drop)")
+    finish()
 
 
 if __name__ == "__main__":

@@ -17,6 +17,7 @@ import xarray as xr
 
 from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
 from slipwave.io import read_acquisition, write_acquisition
+from targets import check, finish
 
 TARGET_ROWS_PER_S = 1e6
 
@@ -47,8 +48,9 @@ def main() -> None:
     print(f"ingest: {args.rows} rows x 6 columns, {size_mb:.0f} MB CSV")
     print(f"ingest: best {best:.3f} s ({args.rows / best / 1e6:.2f} M rows/s), "
           f"median {median:.3f} s ({args.rows / median / 1e6:.2f} M rows/s)")
-    status = "meets" if args.rows / median >= TARGET_ROWS_PER_S else "MISSES"
+    status = check("ingest rows/s", args.rows / median, TARGET_ROWS_PER_S, at_least=True)
     print(f"ingest: {status} the target of {TARGET_ROWS_PER_S / 1e6:.0f} M rows/s (median)")
+    finish()
 
 
 if __name__ == "__main__":

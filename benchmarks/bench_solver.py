@@ -24,6 +24,7 @@ import numpy as np
 
 from slipwave.solver import Coulomb, LoadPath, Slab, simulate
 from slipwave.solver.slab import assemble_condensed, condense
+from targets import check, finish
 
 TARGET = 0.040
 
@@ -61,8 +62,9 @@ def main() -> None:
     args = parser.parse_args()
     for elements in (160, 320):
         seconds = condensation(elements, 1 if elements > 160 else args.repeat)
-        print(f"solver: condensation at {elements} elements: {seconds:.2f} s"
-              + (" (target <= 2 s)" if elements == 160 else ""))
+        verdict = (f" ({check('condensation at 160 elements, s', seconds, 2.0, at_least=False)}"
+                   " the 2 s target)" if elements == 160 else "")
+        print(f"solver: condensation at {elements} elements: {seconds:.2f} s{verdict}")
     frictions = np.round(np.arange(0.10, 1.401, 0.05), 2)
     for control in ("displacement", "force"):
         rows = per_case(control, frictions, args.repeat)
@@ -70,7 +72,7 @@ def main() -> None:
         steps = np.array([r[1] for r in rows])
         slid = np.array([r[2] for r in rows])
         mean = float(times[slid].mean())
-        status = "meets" if mean <= TARGET else "MISSES"
+        status = check(f"solver s per case ({control})", mean, TARGET, at_least=False)
         print(f"solver: N held by {control}: {slid.sum()} of {frictions.size} cases "
               f"(f = 0.10..1.40) reach gross sliding: {mean * 1e3:.1f} ms CPU per case on one "
               f"core ({status} the 40 ms target), {steps[slid].mean():.0f} steps on average")
@@ -80,6 +82,7 @@ def main() -> None:
                   f"before the load cap (they jam, or slide later) and run to it in "
                   f"{steps[~slid].mean():.0f} steps: {times[~slid].mean() * 1e3:.1f} ms each; "
                   f"all {frictions.size} cases: {times.mean() * 1e3:.1f} ms")
+    finish()
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ import numpy as np
 
 from slipwave.bench.camera import write_video
 from slipwave.video import Geometry, kymograph, open_frames
+from targets import check, finish
 
 ROOT = Path(__file__).parents[1]
 FRAMES = 20_000
@@ -72,12 +73,13 @@ def main() -> None:
         rate = kymo.sizes["time"] / took
         short, long = run(path, 5000), run(path, FRAMES)
         size = path.stat().st_size / 1e6
-    status = "meets" if rate >= TARGET else "MISSES"
+    status = check("kymograph frames/s", rate, TARGET, at_least=True)
     print(f"kymograph: {FRAMES} frames 320 x 160 FFV1 ({size:.0f} MB, written in {written:.0f} s)"
           f" in {took:.1f} s = {rate:.0f} frames/s ({status} the {TARGET:.0f} frames/s target; "
           f"decoding alone {decoding:.0f} frames/s)")
     print(f"kymograph: traced peak memory {short[1]:.1f} MB for 5000 frames, {long[1]:.1f} MB "
           f"for {FRAMES} (the kymograph itself: {FRAMES * 268 * 4 * 3 / 1e6:.1f} MB)")
+    finish()
 
 
 if __name__ == "__main__":

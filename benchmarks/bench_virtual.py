@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
+from targets import check, finish
 
 TARGET = 60.0
 
@@ -29,11 +30,12 @@ def main() -> None:
         paths = write_test(result, Path(folder))
         total = time.perf_counter() - start
         sizes = {key: path.stat().st_size / 1e6 for key, path in paths.items()}
-    status = "meets" if total <= TARGET else "MISSES"
+    status = check("virtual bench test, s", total, TARGET, at_least=False)
     print(f"virtual bench: 280 s test, {result.frame_times.size} frames: simulation and "
           f"signals {simulated:.1f} s, total with video and truth {total:.1f} s ({status} the "
           f"{TARGET:.0f} s target)")
     print("virtual bench: sizes (MB): " + ", ".join(f"{k} {v:.2f}" for k, v in sizes.items()))
+    finish()
 
 
 if __name__ == "__main__":

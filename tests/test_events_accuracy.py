@@ -27,6 +27,8 @@ from slipwave.campaign import read_campaign
 from slipwave.events import detect_events
 from slipwave.io import read_acquisition, write_acquisition
 
+pytestmark = pytest.mark.slow  # whole virtual-bench tests: make test-fast leaves them out
+
 ROOT = Path(__file__).parents[1]
 MATCH = 0.1  # s: a detection belongs to the truth event whose onset is this close
 SEEDS = (11, 12, 13)

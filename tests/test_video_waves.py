@@ -24,8 +24,17 @@ import xarray as xr
 from slipwave.campaign import read_campaign
 from slipwave.events import detect_events
 from slipwave.io import read_acquisition
-from slipwave.video import find_geometry, kymograph, open_frames
-from slipwave.video import WAVE_COLUMNS, align_clocks, fuse, track_waves
+from slipwave.video import (
+    WAVE_COLUMNS,
+    align_clocks,
+    find_geometry,
+    fuse,
+    kymograph,
+    open_frames,
+    track_waves,
+)
+
+pytestmark = pytest.mark.slow  # whole virtual-bench tests: make test-fast leaves them out
 
 ROOT = Path(__file__).parents[1]
 BENCH = ROOT / "raw_data" / "bench"

@@ -79,11 +79,12 @@ class DiskCache:
             The matrices for E = 1.
 
         """
-        arrays = {"stiffness": condensed.stiffness, "sensors": condensed.sensors}
-        if condensed.compliance is not None:
-            arrays["compliance"] = condensed.compliance
         try:
             with atomic_output(self._path(key)) as temporary, open(temporary, "wb") as handle:
-                np.savez(handle, **arrays)
+                if condensed.compliance is None:
+                    np.savez(handle, stiffness=condensed.stiffness, sensors=condensed.sensors)
+                else:
+                    np.savez(handle, stiffness=condensed.stiffness, sensors=condensed.sensors,
+                             compliance=condensed.compliance)
         except OSError:
             pass  # a read-only cache only costs time

@@ -117,7 +117,7 @@ def column_pairs(config: Mapping[str, Any], name: str) -> list[str]:
     return [f"{header}={channel}" for header, channel in column_map(config, name).items()]
 
 
-def gross_edge_ratio(config: Mapping[str, Any], test: Mapping[str, str]) -> float:
+def gross_edge_ratio(config: Mapping[str, Any], test: Mapping[str, str] | pd.Series) -> float:
     """A test's DG/DD ratio from which a T drop is a gross slip.
 
     Parameters

@@ -37,7 +37,7 @@ def _optional_float(text: str) -> float | None:
         raise argparse.ArgumentTypeError(f"expected a number or 'none', got {text!r}") from err
 
 
-def _print_warnings(source: object, attrs: Mapping[str, Any]) -> None:
+def _print_warnings(source: object, attrs: Mapping[Any, Any]) -> None:
     for warning in warning_lines(attrs):
         print(f"warning: {source}: {warning}", file=sys.stderr)
 
@@ -191,7 +191,14 @@ def _sawtooth(args: argparse.Namespace) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``slipwave`` (exposed for documentation and tests)."""
+    """The argument parser of ``slipwave`` (exposed for documentation and tests).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        With one subcommand per stage.
+
+    """
     parser = argparse.ArgumentParser(
         prog="slipwave", description="Friction-bench recordings to answers."
     )
@@ -357,7 +364,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status.
+
+    Parameters
+    ----------
+    argv
+        The arguments (``None``: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success, 1 when slipwave reported an error.
+
+    """
     args = build_parser().parse_args(argv)
     try:
         args.run(args)

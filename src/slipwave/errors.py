@@ -76,7 +76,7 @@ class SolverError(SlipwaveError):
         super().__init__(f"step {step}: {message} (relative residual {residual:.3g})")
 
 
-def warning_lines(attrs: Mapping[str, Any]) -> list[str]:
+def warning_lines(attrs: Mapping[Any, Any]) -> list[str]:
     r"""The warnings stored in ``attrs["warnings"]``, one per line, as a list.
 
     Every Dataset and DataFrame slipwave makes keeps its warnings that way

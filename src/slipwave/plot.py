@@ -44,6 +44,19 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
     Missing channels are left out. Axis labels carry the units. With
     ``events`` (from :func:`slipwave.events.events_dataset`) the phases are
     shaded on every panel and each slip's onset is marked on T.
+
+    Parameters
+    ----------
+    recording
+        From :func:`slipwave.io.read_acquisition`.
+    events
+        ``events.nc``, or ``None``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per channel and one for T/|N|.
+
     """
     panels = [c for c in CHANNELS if c in recording.data_vars]
     with sns.axes_style("whitegrid"):
@@ -84,7 +97,21 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
 
 
 def figure_png(fig: Figure, *, dpi: int = 110) -> bytes:
-    """Render a figure to PNG bytes."""
+    """Render a figure to PNG bytes.
+
+    Parameters
+    ----------
+    fig
+        The figure.
+    dpi
+        Resolution, dots per inch.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+
+    """
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()
@@ -100,6 +127,19 @@ def plot_zones(simulation: xr.Dataset, *, vertical: str = "T") -> Figure:
     hold against a photoelastic kymograph. ``vertical`` is ``"T"`` (tangential
     load, N) or ``"step"``. Steps of the normal loading are drawn below T = 0
     when ``vertical="T"`` is not monotonic there, so the step axis is used then.
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate`.
+    vertical
+        ``T``: the tangential load upwards; ``step``: the load step.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The space-time diagram with a legend of the zones.
+
     """
     state = simulation["state"].values
     x = simulation["x"].values
@@ -145,6 +185,21 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
     ``t_start`` to ``x_end`` at ``t_end``) with its direction's colour; a
     change too fast to follow (``unresolved``) as a grey bar over the range it
     changed. ``window`` limits the time shown (s, camera time).
+
+    Parameters
+    ----------
+    kymo
+        From :func:`slipwave.video.kymograph`.
+    waves
+        From :func:`slipwave.video.track_waves`, drawn on it; ``None``: none.
+    window
+        (first, last) camera time shown, s; ``None``: all.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Position along the contact against camera time.
+
     """
     from slipwave.video.waves import change
 
@@ -179,7 +234,21 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
 
 
 def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
-    """A row of frames with their times."""
+    """A row of frames with their times.
+
+    Parameters
+    ----------
+    images
+        The frames (grey, 8 or 16 bit).
+    times
+        Their camera times, s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The frames in a row, each titled with its time.
+
+    """
     fig = Figure(figsize=(2.2 * len(images), 1.6), layout="constrained")
     axes = fig.subplots(1, len(images), squeeze=False)
     for ax, image, time in zip(axes[0], images, times, strict=True):

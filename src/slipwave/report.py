@@ -29,7 +29,19 @@ def _environment() -> jinja2.Environment:
 
 
 def channel_summary(recording: xr.Dataset) -> list[dict[str, Any]]:
-    """One row per channel: units, minimum, maximum, missing samples."""
+    """One row per channel: units, minimum, maximum, missing samples.
+
+    Parameters
+    ----------
+    recording
+        From :func:`slipwave.io.read_acquisition`.
+
+    Returns
+    -------
+    list of dict
+        ``name``, ``long_name``, ``units``, ``min``, ``max``, ``missing``.
+
+    """
     rows = []
     for name in CHANNELS:
         if name not in recording.data_vars:
@@ -171,6 +183,21 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
     it shows the kymograph with the tracked fronts and frames around the
     first gross slip. The page is self-contained (the figure is
     embedded), so it can be mailed or archived on its own.
+
+    Parameters
+    ----------
+    recording
+        From :func:`slipwave.io.read_acquisition` (``recording.nc``).
+    events
+        ``events.nc``, or ``None``.
+    video
+        From :func:`video_summary`, or ``None``.
+
+    Returns
+    -------
+    str
+        The page's HTML.
+
     """
     png = figure_png(plot_recording(recording, events))
     attrs = recording.attrs
@@ -200,7 +227,21 @@ def write_test_page(
     recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None,
     video: dict[str, Any] | None = None,
 ) -> Path:
-    """Write :func:`render_test_page` to ``path``, whole or not at all."""
+    """Write :func:`render_test_page` to ``path``, whole or not at all.
+
+    Parameters
+    ----------
+    recording, events, video
+        As in :func:`render_test_page`.
+    path
+        The HTML file to write.
+
+    Returns
+    -------
+    Path
+        The page written.
+
+    """
     with atomic_output(path) as temporary:
         temporary.write_text(render_test_page(recording, events, video), encoding="utf-8")
     return Path(path)

@@ -32,7 +32,7 @@ from slipwave.solver.slab import Slab, displacement_recovery
 class Camera:
     """Camera and polariscope settings.
 
-    Parameters
+    Attributes
     ----------
     width, height
         Image size (px).
@@ -73,7 +73,19 @@ class Camera:
     clock_rate_error: float = 0.0
 
     def acquisition_time(self, camera_time: np.ndarray) -> np.ndarray:
-        """Acquisition-card time of frames stamped ``camera_time`` by the camera."""
+        """Acquisition-card time of frames stamped ``camera_time`` by the camera.
+
+        Parameters
+        ----------
+        camera_time
+            Frame timestamps, s.
+
+        Returns
+        -------
+        numpy.ndarray
+            The card's times, s.
+
+        """
         return self.clock_offset + camera_time * (1.0 + self.clock_rate_error)
 
 
@@ -132,6 +144,17 @@ class Photoelastic:
         are taken at the element centres, averaged to the nodes and
         interpolated to the pixels: bilinear elements have strains that jump
         between elements, which would draw the mesh into the fringes.
+
+        Parameters
+        ----------
+        u
+            Contact displacements ``[ux, uy]``, mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            (3, pixels) stresses, MPa.
+
         """
         UX = (self._ux @ u).reshape(self._shape)
         UY = (self._uy @ u).reshape(self._shape)
@@ -164,14 +187,42 @@ class Photoelastic:
                 + (1 - xi) * eta * nodal[:, c01] + xi * eta * nodal[:, c11])
 
     def fringe_order(self, stress: np.ndarray) -> np.ndarray:
-        """N_f = (s1 - s2) w / f_sigma at the slab's pixels."""
+        """N_f = (s1 - s2) w / f_sigma at the slab's pixels.
+
+        Parameters
+        ----------
+        stress
+            From :meth:`stress`.
+
+        Returns
+        -------
+        numpy.ndarray
+            Fringe order at each pixel.
+
+        """
         difference = np.hypot(stress[0] - stress[1], 2 * stress[2])
         return difference * self.slab.width / self.camera.fringe_value
 
     def render(
         self, stress: np.ndarray, rng: np.random.Generator, *, led: bool = False
     ) -> np.ndarray:
-        """One frame (height x width, uint8 or uint16) of the given stress field."""
+        """One frame (height x width, uint8 or uint16) of the given stress field.
+
+        Parameters
+        ----------
+        stress
+            From :meth:`stress`.
+        rng
+            The camera noise's random stream.
+        led
+            Whether the sync LED is lit in this frame.
+
+        Returns
+        -------
+        numpy.ndarray
+            The frame.
+
+        """
         camera = self.camera
         image = np.full((camera.height, camera.width), camera.background)
         image[self.interface_row :, :] = camera.flat
@@ -204,6 +255,25 @@ def write_video(
     range. The output is bit-exact for equal input (single encoder thread, no
     dates in the container); H.264 through libx264 was not, from one process to
     the next, on this project's machines, hence VP9.
+
+    Parameters
+    ----------
+    frames
+        Grey frames, all of one size and type.
+    times
+        Their camera timestamps, s.
+    path
+        The ``.mkv`` file.
+    codec
+        ``ffv1`` (lossless) or ``vp9``.
+    fps
+        Nominal frame rate.
+
+    Returns
+    -------
+    Path
+        The video written.
+
     """
     target = Path(path)
     time_base = Fraction(1, 10_000)
@@ -266,6 +336,23 @@ def write_image_sequence(
 
     An image sequence has no timestamps of its own: ``frames.csv`` lists each
     file with its camera time (s). Returns the folder.
+
+    Parameters
+    ----------
+    frames
+        Grey frames.
+    times
+        Their camera timestamps, s.
+    folder
+        Where the images and ``frames.csv`` go.
+    prefix
+        Image names: ``<prefix>_00001.png``...
+
+    Returns
+    -------
+    Path
+        The folder.
+
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

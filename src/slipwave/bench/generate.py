@@ -90,18 +90,39 @@ class BenchTest:
     camera: Camera = field(default_factory=Camera)
 
     def slab(self) -> Slab:
-        """The slab of this test."""
+        """The slab of this test.
+
+        Returns
+        -------
+        Slab
+            Its geometry, material and mesh.
+
+        """
         return Slab(length=self.length, height=self.height, width=self.width,
                     youngs_modulus=self.youngs_modulus, poisson_ratio=self.poisson_ratio,
                     elements=self.elements)
 
     def friction(self) -> Coulomb:
-        """The interface's friction law."""
+        """The interface's friction law.
+
+        Returns
+        -------
+        Coulomb
+            Coulomb's law with run-in.
+
+        """
         runin = self.runin_slips if self.fs_final is not None else 0
         return Coulomb(fs=self.fs, fd=self.fd, fs_final=self.fs_final, runin_slips=runin)
 
     def load_path(self) -> LoadPath:
-        """The bench's load path: N held, the flat driven through the machine."""
+        """The bench's load path: N held, the flat driven through the machine.
+
+        Returns
+        -------
+        LoadPath
+            Normal load held, then the actuator's travel.
+
+        """
         travel = self.speed * (self.duration - self.loading_time) + 2 * self.travel_step
         return LoadPath(normal_load=self.normal_load, normal_control="force",
                         machine_stiffness=self.machine_stiffness, max_travel=travel,
@@ -127,6 +148,18 @@ class BenchResult:
 
 def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
     """Generate one test in memory: recording, truth and a frame iterator.
+
+    Parameters
+    ----------
+    spec
+        The test.
+    seed
+        Noise seed (card and camera).
+
+    Returns
+    -------
+    BenchResult
+        The recording, the truth and the frames.
 
     Examples
     --------
@@ -337,6 +370,16 @@ def write_test(
     dict
         The paths written: ``csv``, ``video`` (if any), ``events``, ``phases``,
         ``parameters``.
+
+    Parameters
+    ----------
+    result
+        From :func:`simulate_test`.
+    folder
+        The campaign folder.
+    progress
+        Show a progress bar while filming.
+
     """
     folder = Path(folder)
     spec = result.spec
@@ -403,7 +446,24 @@ def read_bench_config(path: str | PathLike[str]) -> list[BenchTest]:
 
 
 def load_tests(config: dict[str, Any]) -> list[BenchTest]:
-    """Tests of a campaign config: ``defaults`` merged into each of ``tests``."""
+    """Tests of a campaign config: ``defaults`` merged into each of ``tests``.
+
+    Parameters
+    ----------
+    config
+        The campaign's mapping (``defaults``, ``tests``).
+
+    Returns
+    -------
+    list of BenchTest
+        One per entry of ``tests``.
+
+    Raises
+    ------
+    SlipwaveError
+        If there is no test, an unknown setting or a repeated id.
+
+    """
     defaults = dict(config.get("defaults") or {})
     tests = config.get("tests")
     if not tests:
@@ -428,6 +488,23 @@ def write_campaign(
     """Write every test of a campaign and its table ``tests.tsv``; returns the table.
 
     Test k uses the seed ``seed + k``.
+
+    Parameters
+    ----------
+    specs
+        The tests.
+    folder
+        The campaign folder.
+    seed
+        Noise seed of the first test.
+    progress
+        Show progress bars.
+
+    Returns
+    -------
+    Path
+        The campaign table ``tests.tsv``.
+
     """
     folder = Path(folder)
     rows = []

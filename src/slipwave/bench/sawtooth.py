@@ -69,6 +69,11 @@ def sawtooth_events(bench: SawtoothBench) -> pd.DataFrame:
         ``t_start`` (s), ``kind`` (``gross_slip`` or ``partial_slip``),
         ``drop`` (N).
 
+    Parameters
+    ----------
+    bench
+        The test's parameters.
+
     """
     rate = bench.stiffness * bench.speed  # N/s while the interface sticks
     threshold = bench.ratio * bench.normal_load
@@ -92,6 +97,18 @@ def sawtooth_events(bench: SawtoothBench) -> pd.DataFrame:
 
 def sawtooth_recording(bench: SawtoothBench, *, seed: int = 0) -> xr.Dataset:
     """Signals of a saw-tooth test, as :func:`slipwave.io.read_acquisition` returns them.
+
+    Parameters
+    ----------
+    bench
+        The test's parameters.
+    seed
+        Noise seed.
+
+    Returns
+    -------
+    xarray.Dataset
+        time, T, N, DG, DD, DT with CF attributes.
 
     Examples
     --------

@@ -30,6 +30,21 @@ def step_times(simulation: xr.Dataset, *, speed: float, loading_time: float) -> 
     Normal steps share ``loading_time`` in proportion to their normal load; a
     tangential step ends when the actuator, moving at ``speed`` (mm/s) from the
     end of the normal loading, reaches its travel.
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate` along the bench's load path.
+    speed
+        The actuator's speed, mm/s.
+    loading_time
+        Duration of the normal loading, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        One time per step, s.
+
     """
     phase = simulation["phase"].values
     normal = phase == "normal"
@@ -48,6 +63,19 @@ def wave_durations(simulation: xr.Dataset, *, wave_speed: float) -> np.ndarray:
     """Time (s) each step's wave takes to sweep its extent at ``wave_speed`` (mm/s).
 
     Zero for steps without a wave.
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate`.
+    wave_speed
+        Speed of the slip front, mm/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        One duration per step, s.
+
     """
     slipped = simulation["cascade_round"].values >= 0
     x = simulation["x"].values
@@ -70,6 +98,21 @@ def wave_windows(
     response rises until ``peak``, and the step's wave, if any, runs from
     ``peak`` to ``end``, taking the time it needs to sweep its extent (at most
     half the step).
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate`.
+    speed, loading_time
+        As in :func:`step_times`.
+    wave_speed
+        As in :func:`wave_durations`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        start, peak and end of every step, s.
+
     """
     ends = step_times(simulation, speed=speed, loading_time=loading_time)
     starts = np.concatenate([[0.0], ends[:-1]])
@@ -91,6 +134,24 @@ def clean_signals(
 
     Loads are for the full width, N with the card's sign (negative in
     compression). The test starts unloaded at t = 0.
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate` along the bench's load path.
+    speed, loading_time
+        As in :func:`step_times`.
+    duration
+        Length of the recording, s.
+    sample_rate
+        The card's sampling rate, Hz.
+    wave_speed
+        As in :func:`wave_durations`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The noise-free channels along ``time``.
 
     Examples
     --------
@@ -130,7 +191,23 @@ def clean_signals(
 def step_progress(
     time: np.ndarray, k: np.ndarray, starts: np.ndarray, peaks: np.ndarray, ends: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """How far the rise and the wave of step ``k`` have gone at ``time`` (0 to 1 each)."""
+    """How far the rise and the wave of step ``k`` have gone at ``time`` (0 to 1 each).
+
+    Parameters
+    ----------
+    time
+        Sample times, s.
+    k
+        The step of each sample.
+    starts, peaks, ends
+        From :func:`wave_windows`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Rise and wave progress of each sample, 0 to 1.
+
+    """
     rising = np.clip((time - starts[k]) / np.maximum(peaks[k] - starts[k], 1e-12), 0, 1)
     falling = np.clip((time - peaks[k]) / np.maximum(ends[k] - peaks[k], 1e-12), 0, 1)
     return rising, falling
@@ -140,7 +217,7 @@ def step_progress(
 class Sensor:
     """What a sensor and its acquisition channel do to the true signal.
 
-    Parameters
+    Attributes
     ----------
     gain
         Relative gain error (recorded = true * (1 + gain)).
@@ -171,6 +248,20 @@ class Sensor:
 
     def record(self, true: np.ndarray, time: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """The recorded values of ``true`` sampled at ``time``.
+
+        Parameters
+        ----------
+        true
+            The true signal.
+        time
+            Its sample times, s.
+        rng
+            The channel's random stream.
+
+        Returns
+        -------
+        numpy.ndarray
+            What the card records.
 
         Examples
         --------
@@ -219,6 +310,21 @@ def apply_sensors(
 
     Each channel draws from its own random stream (seeded from ``seed`` and the
     channel), so a channel's noise does not depend on which others exist.
+
+    Parameters
+    ----------
+    clean
+        From :func:`clean_signals`.
+    sensors
+        Channel -> sensor; ``None``: :data:`DEFAULT_SENSORS`.
+    seed
+        Noise seed.
+
+    Returns
+    -------
+    xarray.Dataset
+        The recorded channels, as :func:`slipwave.io.read_acquisition` returns them.
+
     """
     sensors = DEFAULT_SENSORS if sensors is None else sensors
     recorded = clean.copy()

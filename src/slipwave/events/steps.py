@@ -43,6 +43,16 @@ def noise_level(values: np.ndarray) -> float:
     whose differences are mostly zero falls back on the standard deviation of
     the differences inside their central 90 %.
 
+    Parameters
+    ----------
+    values
+        The signal (NaN ignored).
+
+    Returns
+    -------
+    float
+        Its white-noise standard deviation, in its own unit.
+
     Examples
     --------
     >>> rng = np.random.default_rng(0)
@@ -75,6 +85,18 @@ def despike(values: np.ndarray, max_spike: int = MAX_SPIKE) -> np.ndarray:
     left cannot hold the majority of a block, so it is gone from the result,
     whatever its height. The result is ``values.size // block`` long (the
     last incomplete block is dropped).
+
+    Parameters
+    ----------
+    values
+        The signal.
+    max_spike
+        Longest spike removed, samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        One median per block.
 
     Examples
     --------
@@ -521,6 +543,19 @@ def window_median(values: np.ndarray, first: int, last: int) -> float:
     """Median of ``values[first:last]`` (clipped to the signal), NaN if empty.
 
     Long windows are thinned to about 1000 evenly spaced samples.
+
+    Parameters
+    ----------
+    values
+        The signal.
+    first, last
+        The window, as slice bounds.
+
+    Returns
+    -------
+    float
+        The median, NaN for an empty window.
+
     """
     first, last = max(first, 0), min(last, values.size)
     segment = values[first:last:max(1, (last - first) // 1000)]

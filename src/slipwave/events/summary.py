@@ -26,6 +26,11 @@ def load_ratio(recording: xr.Dataset, *, min_fraction: float = 0.05) -> xr.DataA
         Where |N| is below this fraction of its maximum (the start of normal
         loading) the ratio is meaningless and set to NaN.
 
+    Returns
+    -------
+    xarray.DataArray
+        ``T_over_N`` along ``time``, dimensionless.
+
     Examples
     --------
     The first sample, at |N| = 1 N < 5 % of 85 N, is masked:
@@ -49,6 +54,18 @@ def normal_loading_end(recording: xr.Dataset, *, plateau_fraction: float = 0.98)
     The plateau is the median |N| over the second half of the recording; the
     normal loading ends where |N| first reaches ``plateau_fraction`` of it.
 
+    Parameters
+    ----------
+    recording
+        With ``N``.
+    plateau_fraction
+        Fraction of the plateau that ends the normal loading.
+
+    Returns
+    -------
+    int
+        The sample index (the recording's length if never reached).
+
     Examples
     --------
     >>> ds = xr.Dataset({"N": ("time", -np.minimum(np.arange(20.0), 10.0))})
@@ -71,6 +88,18 @@ def segment_phases(recording: xr.Dataset, events: pd.DataFrame) -> xr.DataArray:
     ``normal_loading``; samples from an event's onset to its end take the
     event's kind (gross wins where events overlap; unclassified events count
     as partial slips); the rest is ``stick``.
+
+    Parameters
+    ----------
+    recording
+        With ``N`` (and ``time``).
+    events
+        From :func:`~slipwave.events.detect_events`.
+
+    Returns
+    -------
+    xarray.DataArray
+        ``phase`` along ``time``, one of :data:`PHASES`.
 
     Examples
     --------
@@ -159,8 +188,18 @@ def friction_ratio(events: pd.DataFrame, *, confidence: float = 0.95) -> xr.Data
     )
 
 
-def wave_counts(events: pd.DataFrame) -> dict[str, int]:
+def wave_counts(events: pd.DataFrame | xr.Dataset) -> dict[str, int]:
     """Number of partial and gross slips (and unclassified drops, if any).
+
+    Parameters
+    ----------
+    events
+        With a ``kind`` column or variable.
+
+    Returns
+    -------
+    dict
+        Kind -> count; ``unclassified`` only when there are some.
 
     Examples
     --------
@@ -175,7 +214,19 @@ def wave_counts(events: pd.DataFrame) -> dict[str, int]:
 
 
 def phase_durations(phase: xr.DataArray) -> dict[str, float]:
-    """Time (s) spent in each phase: samples times the sampling interval."""
+    """Time (s) spent in each phase: samples times the sampling interval.
+
+    Parameters
+    ----------
+    phase
+        From :func:`segment_phases`.
+
+    Returns
+    -------
+    dict
+        Phase -> seconds.
+
+    """
     time = phase["time"].values.astype(float)
     interval = float(np.median(np.diff(time))) if time.size > 1 else 0.0
     labels = phase.values
@@ -187,6 +238,19 @@ def summary_row(test_id: str, dataset: xr.Dataset) -> dict[str, object]:
 
     Friction ratios at gross slips (mean, std, confidence interval), wave
     counts, time spent in each phase, warnings.
+
+    Parameters
+    ----------
+    test_id
+        The test.
+    dataset
+        ``events.nc``.
+
+    Returns
+    -------
+    dict
+        Column -> value of the summary's row.
+
     """
     row: dict[str, object] = {"test_id": test_id}
     row.update({f"{k}_waves": v for k, v in wave_counts(dataset).items()})

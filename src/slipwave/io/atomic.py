@@ -19,6 +19,17 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
 
     The destination is written whole or not at all: a failure leaves any
     previous file untouched and no partial file behind.
+
+    Parameters
+    ----------
+    path
+        The destination.
+
+    Yields
+    ------
+    Path
+        The temporary file to write.
+
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)

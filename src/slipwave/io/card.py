@@ -48,6 +48,11 @@ def write_acquisition(
     float_format
         printf format of the values.
 
+    Returns
+    -------
+    Path
+        The CSV written.
+
     """
     channels = [c for c in CHANNELS if c in ds.data_vars]
     frame = pd.DataFrame({"time": ds["time"].values, **{c: ds[c].values for c in channels}})

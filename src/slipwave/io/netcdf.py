@@ -36,6 +36,13 @@ def write_dataset(ds: xr.Dataset, path: str | PathLike[str]) -> Path:
     Path
         The written file.
 
+    Parameters
+    ----------
+    ds
+        The Dataset.
+    path
+        The netCDF file.
+
     """
     out = ds.copy()
     out.attrs = {k: _netcdf_attr(v) for k, v in ds.attrs.items() if v is not None}
@@ -59,7 +66,24 @@ def write_dataset(ds: xr.Dataset, path: str | PathLike[str]) -> Path:
 
 
 def read_dataset(path: str | PathLike[str]) -> xr.Dataset:
-    """Load a Dataset written by :func:`write_dataset` fully into memory."""
+    """Load a Dataset written by :func:`write_dataset` fully into memory.
+
+    Parameters
+    ----------
+    path
+        The netCDF file.
+
+    Returns
+    -------
+    xarray.Dataset
+        Its content, loaded.
+
+    Raises
+    ------
+    SlipwaveError
+        If the file cannot be read as netCDF.
+
+    """
     try:
         return xr.load_dataset(path, engine="netcdf4", decode_timedelta=False)
     except (OSError, ValueError) as err:

@@ -73,7 +73,14 @@ class Behaviour:
 
     @property
     def paper_name(self) -> str | None:
-        """``"ZD"`` or ``"ZG"`` when the behaviour is one the paper names."""
+        """``"ZD"`` or ``"ZG"`` when the behaviour is one the paper names.
+
+        Returns
+        -------
+        str or None
+            The paper's name, or ``None`` for an unnamed behaviour.
+
+        """
         if self.first_slip == "right" and self.sweep == "right_to_left":
             return "ZD"
         if self.first_slip == "interior" and self.sweep == "from_interior_to_right":
@@ -106,6 +113,16 @@ def _region(mask: np.ndarray, x: np.ndarray) -> str:
 
 def describe_behaviour(ds: xr.Dataset) -> Behaviour:
     """Classify the interface behaviour of a :func:`~slipwave.solver.simulate` result.
+
+    Parameters
+    ----------
+    ds
+        From :func:`~slipwave.solver.simulate`.
+
+    Returns
+    -------
+    Behaviour
+        The features of the zone history and their label.
 
     Examples
     --------

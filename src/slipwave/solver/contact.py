@@ -94,6 +94,9 @@ class Body:
         (2n, 2n) stiffness on ``[ux, uy]`` of the contact nodes.
     initial_gap
         g0 (n,), mm.
+    compliance
+        The inverse of ``stiffness`` (the flexibility form); ``None`` when the
+        body alone has a rigid mode, and only the stiffness form is used.
 
     """
 
@@ -134,6 +137,23 @@ class Body:
         and slipping nodes (2 open + slip unknowns), or forces of the stuck and
         slipping ones (2 stick + slip). Each zone state's matrix is factorised
         once and kept for the next increments, which mostly meet it again.
+
+        Parameters
+        ----------
+        state
+            Zone of each node (open, stick or slip).
+        mu
+            Signed friction coefficient of the slipping nodes.
+        s_prev
+            Relative tangential positions at the end of the previous increment.
+        control
+            What is imposed on the flat in this increment.
+
+        Returns
+        -------
+        tuple
+            Contact displacements, flat x and flat y positions.
+
         """
         kinds = (control.dx is None, control.dy is None, control.T is not None,
                  control.N is not None)
@@ -177,6 +197,12 @@ class Body:
         NotConverged
             When the active set cycles or the linear problem is singular; the
             caller may sub-step.
+
+        Returns
+        -------
+        Increment
+            The converged zone state, displacements and reactions.
+
         """
         if guess is not None and guess_sign is not None and static == dynamic:
             try:
@@ -298,6 +324,27 @@ class Body:
 
         Normal: ``min(P, c g)``; tangential: ``Q - proj_[-f P+, f P+](Q - c ds)``
         (Alart-Curnier); controls: the prescribed totals. Scaled by ``max |P|``.
+
+        Parameters
+        ----------
+        P, Q
+            Normal and tangential contact forces.
+        gap
+            Normal gaps.
+        ds
+            Slip increments.
+        limit
+            Friction limit of each node (``f P``).
+        control
+            What is imposed on the flat.
+        dx
+            The flat's tangential position.
+
+        Returns
+        -------
+        float
+            The largest violation relative to the load scale.
+
         """
         positive = np.maximum(P, 0.0)
         normal = np.minimum(P, self.cy * gap)
@@ -325,6 +372,25 @@ class Body:
         ``dx`` is then free (the flat slides under the body); it is set to at
         least ``dx_floor`` and far enough that every node slips backwards
         relative to the flat, as it must.
+
+        Parameters
+        ----------
+        s_prev
+            Relative tangential positions at the end of the previous increment.
+        dynamic
+            The dynamic friction coefficient.
+        control
+            What is imposed on the flat.
+        dx_floor
+            The least flat position of the increment.
+        guess
+            A starting zone state, or ``None``.
+
+        Returns
+        -------
+        Increment
+            Every node slipping forward (or open).
+
         """
         if guess is None:
             state = np.where(self.g0 <= 0, SLIP, OPEN).astype(np.int8)

@@ -45,7 +45,19 @@ class Coulomb:
             raise SlipwaveError("a run-in needs fs_final >= fd and runin_slips > 0")
 
     def static_after(self, gross_slips: int) -> float:
-        """The static coefficient after ``gross_slips`` gross slips."""
+        """The static coefficient after ``gross_slips`` gross slips.
+
+        Parameters
+        ----------
+        gross_slips
+            Gross slips so far.
+
+        Returns
+        -------
+        float
+            The static coefficient.
+
+        """
         if self.fs_final is None:
             return self.fs
         progress = min(gross_slips / self.runin_slips, 1.0)
@@ -53,7 +65,14 @@ class Coulomb:
 
     @property
     def dynamic(self) -> float:
-        """Fd as a float."""
+        """Fd as a float.
+
+        Returns
+        -------
+        float
+            fd, or fs when fd is not given.
+
+        """
         return float(self.fs if self.fd is None else self.fd)
 
 
@@ -61,7 +80,7 @@ class Coulomb:
 class LoadPath:
     """The bench's loading: normal approach, then the flat's tangential travel.
 
-    Parameters
+    Attributes
     ----------
     normal_load
         Normal load (N, compressive, full width) reached in step 1.
@@ -290,6 +309,18 @@ def simulate(
     ------
     SolverError
         If an increment does not converge, even sub-stepped.
+
+    Parameters
+    ----------
+    slab
+        The slab and its mesh.
+    friction
+        The interface's friction law.
+    path
+        The load path (``None``: :class:`LoadPath`'s defaults).
+    condensed
+        The slab's condensed matrices, when the caller has them (a map row, a
+        store); ``None``: :func:`~slipwave.solver.condense`.
 
     Examples
     --------

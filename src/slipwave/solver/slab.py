@@ -54,7 +54,7 @@ _MAX_CONDITION = 1e10  # above: a rigid mode the holder does not stop
 class Slab:
     """A rectangular elastic slab on a rigid flat (mm, MPa).
 
-    Parameters
+    Attributes
     ----------
     length
         L, along the contact.
@@ -105,18 +105,39 @@ class Slab:
 
     @property
     def x(self) -> np.ndarray:
-        """Contact node abscissae (mm), left to right, origin at the centre."""
+        """Contact node abscissae (mm), left to right, origin at the centre.
+
+        Returns
+        -------
+        numpy.ndarray
+            (elements + 1,) positions, mm.
+
+        """
         return np.linspace(-self.length / 2, self.length / 2, self.elements + 1)
 
     @property
     def tributary_length(self) -> np.ndarray:
-        """Length of contact (mm) each node stands for: h inside, h/2 at the ends."""
+        """Length of contact (mm) each node stands for: h inside, h/2 at the ends.
+
+        Returns
+        -------
+        numpy.ndarray
+            (elements + 1,) lengths, mm.
+
+        """
         weights = np.full(self.elements + 1, self.length / self.elements)
         weights[[0, -1]] /= 2
         return weights
 
     def initial_gap(self) -> np.ndarray:
-        """g0 at the contact nodes (mm)."""
+        """g0 at the contact nodes (mm).
+
+        Returns
+        -------
+        numpy.ndarray
+            (elements + 1,) gaps, mm (zero for a flat slab).
+
+        """
         if self.profile is None:
             return np.zeros(self.elements + 1)
         gap = np.asarray(self.profile(self.x), dtype=np.float64)
@@ -125,7 +146,14 @@ class Slab:
         return gap - gap.min()
 
     def heights(self) -> np.ndarray:
-        """Node rows of the mesh (mm): fine at the contact, graded upwards."""
+        """Node rows of the mesh (mm): fine at the contact, graded upwards.
+
+        Returns
+        -------
+        numpy.ndarray
+            Heights of the node rows, mm, from 0 to H.
+
+        """
         h0 = self.length / self.elements
         rows, step = [0.0], h0
         while rows[-1] < self.height - 1e-9:
@@ -167,10 +195,31 @@ class CondensationStore(Protocol):
     """
 
     def load(self, key: str) -> Condensed | None:
-        """The matrices stored under ``key``, or ``None``."""
+        """The matrices stored under ``key``, or ``None``.
+
+        Parameters
+        ----------
+        key
+            From :func:`geometry_key`.
+
+        Returns
+        -------
+        Condensed or None
+            The stored matrices, or ``None``.
+
+        """
 
     def save(self, key: str, condensed: Condensed) -> None:
-        """Keep ``condensed`` under ``key``."""
+        """Keep ``condensed`` under ``key``.
+
+        Parameters
+        ----------
+        key
+            From :func:`geometry_key`.
+        condensed
+            The matrices for E = 1.
+
+        """
 
 
 def geometry_key(slab: Slab) -> str:
@@ -324,7 +373,19 @@ def _condense_sensors(schur: np.ndarray, n_contact: int) -> tuple[np.ndarray, np
 
 
 def assemble_condensed(slab: Slab) -> Condensed:
-    """Assemble the slab with scikit-fem and condense it (no cache)."""
+    """Assemble the slab with scikit-fem and condense it (no cache).
+
+    Parameters
+    ----------
+    slab
+        The slab.
+
+    Returns
+    -------
+    Condensed
+        Its condensed matrices for its own E.
+
+    """
     assembly = _assemble(slab)
     k_ik, response = _interior_response(assembly)
     kept = assembly.kept
@@ -358,6 +419,17 @@ def displacement_recovery(slab: Slab) -> DisplacementRecovery:
 
     The interior follows from the contact (no other load acts on the slab), so
     the whole field of a solver step is ``recovery.ux @ [ux; uy]``.
+
+    Parameters
+    ----------
+    slab
+        The slab.
+
+    Returns
+    -------
+    DisplacementRecovery
+        The map and the mesh it gives displacements on.
+
     """
     assembly = _assemble(slab)
     k_ik, response = _interior_response(assembly)

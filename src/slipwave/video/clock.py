@@ -128,6 +128,19 @@ def sync_offset(kymo: xr.Dataset, sync_time: float) -> float | None:
 
     The first lit frame comes at most one frame after the LED lit up: the
     offset is taken half a frame before it. ``None`` when no frame is lit.
+
+    Parameters
+    ----------
+    kymo
+        With the ``sync`` corner's level.
+    sync_time
+        Card time the LED lit up, s.
+
+    Returns
+    -------
+    float or None
+        card time - camera time, s.
+
     """
     level = kymo["sync"].values.astype(float)
     lit = level > 0.5 * (level.max() + np.median(level))
@@ -144,6 +157,21 @@ def correlation_offset(kymo: xr.Dataset, recording: xr.Dataset, *,
 
     Cross-correlates the band's total change per frame with ``max(-dT/dt, 0)``
     sampled on the frames, over offsets up to ``max_offset`` (s) either way.
+
+    Parameters
+    ----------
+    kymo
+        From :func:`~slipwave.video.kymograph`.
+    recording
+        With ``T``.
+    max_offset
+        Largest offset tried, s.
+
+    Returns
+    -------
+    float
+        card time - camera time, s, to a frame.
+
     """
     time = kymo["time"].values.astype(float)
     period = float(np.median(np.diff(time)))
@@ -181,6 +209,27 @@ def align_clocks(
     (Theil-Sen: a wrong pair does not tilt it); the residual is the robust
     standard deviation (1.4826 MAD) of its misfit (wave starts are known to a
     frame).
+
+    Parameters
+    ----------
+    waves
+        From :func:`~slipwave.video.track_waves` (camera time).
+    kymo
+        Their kymograph.
+    recording
+        The test's recording.
+    events
+        From :func:`~slipwave.events.detect_events` (card time).
+    sync_time
+        Card time the sync LED lit up, s.
+    tolerance
+        Largest wave-event gap that pairs them, s.
+
+    Returns
+    -------
+    ClockFit
+        The fit, how it was found and its residual.
+
     """
     if sync_time is None and "sync_time_s" in recording.attrs:
         sync_time = float(recording.attrs["sync_time_s"])

@@ -20,6 +20,23 @@ def fuse(events: pd.DataFrame, waves: pd.DataFrame, clock: ClockFit, *,
     extent (none for an ``unresolved`` wave) and ``kind_agrees`` compares it
     with the event's; ``source`` says
     ``both``, ``load`` (no wave seen) or ``video`` (a wave without a T drop).
+
+    Parameters
+    ----------
+    events
+        From :func:`~slipwave.events.detect_events`.
+    waves
+        From :func:`~slipwave.video.track_waves`.
+    clock
+        From :func:`~slipwave.video.align_clocks`.
+    tolerance
+        Largest gap between a wave's start and an event's onset, s.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per event or lone wave, in time order.
+
     """
     starts = clock.acquisition_time(waves["t_start"].to_numpy(dtype=float))
     taken = np.zeros(len(waves), dtype=bool)

@@ -72,19 +72,62 @@ class Geometry:
 
     @property
     def scale(self) -> float:
-        """Pixels per mm."""
+        """Pixels per mm.
+
+        Returns
+        -------
+        float
+            Pixels per mm.
+
+        """
         return (self.right - self.left) / self.length
 
     def columns(self) -> np.ndarray:
-        """Indices of the pixel columns inside the contact."""
+        """Indices of the pixel columns inside the contact.
+
+        Returns
+        -------
+        numpy.ndarray
+            Column indices.
+
+        """
         return np.arange(int(np.ceil(self.left - 0.5)), int(np.floor(self.right - 0.5)) + 1)
 
     def x(self, columns: np.ndarray) -> np.ndarray:
-        """Position (mm, origin at the contact's centre) of pixel columns' centres."""
+        """Position (mm, origin at the contact's centre) of pixel columns' centres.
+
+        Parameters
+        ----------
+        columns
+            Pixel column indices.
+
+        Returns
+        -------
+        numpy.ndarray
+            Positions, mm.
+
+        """
         return (columns + 0.5 - self.left) / self.scale - self.length / 2
 
     def band_rows(self, band_mm: tuple[float, float]) -> np.ndarray:
-        """Pixel rows between ``band_mm[0]`` and ``band_mm[1]`` mm above the interface."""
+        """Pixel rows between ``band_mm[0]`` and ``band_mm[1]`` mm above the interface.
+
+        Parameters
+        ----------
+        band_mm
+            (low, high), mm above the interface.
+
+        Returns
+        -------
+        numpy.ndarray
+            Row indices, top to bottom.
+
+        Raises
+        ------
+        SlipwaveError
+            If the band holds no row inside the frame.
+
+        """
         low = self.interface_row - band_mm[1] * self.scale
         high = self.interface_row - band_mm[0] * self.scale
         rows = np.arange(int(np.floor(low)), int(np.ceil(high)))
@@ -103,6 +146,20 @@ def find_geometry(frames: Iterable[Frame], length: float, *, count: int = 300) -
     the slab lit up in any of these frames (fringes appear under the normal
     load). The scale follows from ``length``, the contact length in
     mm.
+
+    Parameters
+    ----------
+    frames
+        The frames (only the first ``count`` are read).
+    length
+        The contact's length, mm (sets the scale).
+    count
+        Frames looked at.
+
+    Returns
+    -------
+    Geometry
+        Interface row, contact ends (pixel columns) and length.
 
     Examples
     --------

@@ -29,6 +29,17 @@ def change(kymo: xr.Dataset) -> xr.DataArray:
 
     The kymograph's ``motion`` (mean absolute change of the band's pixels),
     smoothed over 3 pixels along the band; the first frame has none (0).
+
+    Parameters
+    ----------
+    kymo
+        From :func:`~slipwave.video.kymograph`.
+
+    Returns
+    -------
+    xarray.DataArray
+        (time, x), in units of the full grey scale.
+
     """
     smooth = ndimage.uniform_filter1d(kymo["motion"].values.astype(float), SMOOTHING, axis=1,
                                       mode="nearest")
@@ -207,6 +218,19 @@ def arrivals(excess: np.ndarray, floor: float) -> np.ndarray:
     ``floor``; its arrival is the excess-weighted mean of the frames where the
     excess is at least half its largest (low, slow changes before or after do
     not move it).
+
+    Parameters
+    ----------
+    excess
+        (frames, positions) change above each position's sticking level.
+    floor
+        Least excess that counts as a change.
+
+    Returns
+    -------
+    numpy.ndarray
+        (positions,) frame indices, NaN where nothing changed.
+
     """
     peak = excess.max(axis=0)
     strong = np.where(excess >= 0.5 * peak, excess, 0.0)
@@ -231,6 +255,25 @@ def sweep(excess: np.ndarray, *, floor: float, hole: int, stop: int,
 
     Returns ``(start, end, arrivals)``, or ``None`` when fewer than 3 positions
     changed.
+
+    Parameters
+    ----------
+    excess
+        As in :func:`arrivals`.
+    floor
+        As in :func:`arrivals`.
+    hole
+        Positions without a change the front may cross.
+    stop
+        Positions from the start beyond which an early arrival ends the sweep.
+    tolerance
+        Frames an arrival may come before its neighbour's and still follow it.
+
+    Returns
+    -------
+    tuple or None
+        (start, stop, arrival times), or ``None`` without a front.
+
     """
     arrival = arrivals(excess, floor)
     changed = np.flatnonzero(np.isfinite(arrival))

@@ -1,0 +1,71 @@
+"""One source per parameter: the workflow's schema, the CLI and the library agree."""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+
+import pytest
+
+from slipwave import defaults
+from slipwave.cli import build_parser
+from slipwave.events import detect_events, edge_jumps, load_drops
+from slipwave.solver import LoadPath, Slab
+from slipwave.video import kymograph
+
+SCHEMA = json.loads(
+    (Path(__file__).parents[1] / "workflow/schemas/config.schema.json").read_text())
+
+# config key -> (the library's default, the CLI subcommand and its option's dest)
+WORKFLOW_PARAMETERS = {
+    ("detection", "threshold"): (defaults.THRESHOLD, "detect", "threshold"),
+    ("detection", "max_spike"): (defaults.MAX_SPIKE, "detect", "max_spike"),
+    ("detection", "max_duration"): (defaults.MAX_DURATION_S, "detect", "max_duration"),
+    ("detection", "min_asymmetry"): (defaults.MIN_ASYMMETRY, "detect", "min_asymmetry"),
+    ("detection", "gross_edge_ratio"): (defaults.GROSS_EDGE_RATIO, "detect", "gross_edge_ratio"),
+    ("video", "length_mm"): (defaults.CONTACT_LENGTH_MM, "kymograph", "length"),
+    ("video", "band_mm"): (list(defaults.BAND_MM), "kymograph", "band"),
+}
+
+
+def _cli_default(command: str, dest: str) -> object:
+    parser = build_parser()
+    commands = next(a for a in parser._actions if a.dest == "command")
+    sub = commands.choices[command]  # type: ignore[index]
+    return next(a.default for a in sub._actions if a.dest == dest)
+
+
+@pytest.mark.parametrize(("section", "key"), list(WORKFLOW_PARAMETERS))
+def test_schema_cli_and_library_defaults_agree(section, key):
+    value, command, dest = WORKFLOW_PARAMETERS[(section, key)]
+    assert SCHEMA["properties"][section]["properties"][key]["default"] == value
+    assert _cli_default(command, dest) == value
+
+
+def test_every_schema_default_is_listed():
+    listed = {(s, k) for s, k in WORKFLOW_PARAMETERS}
+    for section in ("detection", "video"):
+        for key in SCHEMA["properties"][section]["properties"]:
+            assert (section, key) in listed
+
+
+def test_library_signatures_take_the_defaults():
+    for function in (detect_events, load_drops, edge_jumps):
+        parameters = inspect.signature(function).parameters
+        assert parameters["threshold"].default == defaults.THRESHOLD
+        assert parameters["max_spike"].default == defaults.MAX_SPIKE
+        assert parameters["max_duration"].default == defaults.MAX_DURATION_S
+    assert inspect.signature(detect_events).parameters["gross_edge_ratio"].default == \
+        defaults.GROSS_EDGE_RATIO
+    assert inspect.signature(kymograph).parameters["band_mm"].default == defaults.BAND_MM
+    slab = Slab()
+    assert (slab.length, slab.height, slab.width, slab.youngs_modulus, slab.poisson_ratio,
+            slab.elements) == (defaults.CONTACT_LENGTH_MM, defaults.SLAB_HEIGHT_MM,
+                               defaults.SLAB_WIDTH_MM, defaults.YOUNGS_MODULUS_MPA,
+                               defaults.POISSON_RATIO, defaults.CONTACT_ELEMENTS)
+    path = LoadPath()
+    assert (path.normal_load, path.tangential_step) == (defaults.NORMAL_LOAD_N,
+                                                         defaults.TANGENTIAL_STEP_N)
+    assert _cli_default("simulate", "height") == defaults.SLAB_HEIGHT_MM
+    assert _cli_default("simulate", "normal_load") == defaults.NORMAL_LOAD_N
