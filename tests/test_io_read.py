@@ -196,7 +196,7 @@ def test_last_line_cut_inside_a_number(write):
     text = CANONICAL + "0.04,4.5,-82.0,0.14,0.24,1e-"
     ds = read_acquisition(write(text))
     check_values(ds)
-    assert "line 13: truncated last line dropped" in ds.attrs["warnings"]
+    assert "line 13: the file ends inside this line" in ds.attrs["warnings"]
 
 
 def test_nan_runs_counted(write):

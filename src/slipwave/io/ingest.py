@@ -21,13 +21,14 @@ import contextlib
 import functools
 import hashlib
 import io
+import os
 import re
 import unicodedata
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import pandas as pd
@@ -308,16 +309,41 @@ def _unit_factor(path: Path, head: _Head, channel: str, k: int) -> float:
         ) from err
 
 
-def _read_bytes(path: Path) -> bytes:
+_HEAD_BYTES = 1 << 20  # the metadata, header and first rows are looked for in the first MiB
+_CHUNK_BYTES = 4 << 20  # the data are parsed in blocks of whole lines of about this size
+
+
+def _open(path: Path) -> BinaryIO:
     try:
-        with open(path, "rb") as handle:  # read-only: raw data are never written
-            return handle.read()
+        return open(path, "rb")  # read-only: raw data are never written
     except FileNotFoundError as err:
         raise AcquisitionError(path, "no such file") from err
     except IsADirectoryError as err:
         raise AcquisitionError(path, "is a directory, not an acquisition file") from err
     except OSError as err:
         raise AcquisitionError(path, f"cannot be read: {err.strerror}") from err
+
+
+def _text_stream(path: Path, handle: BinaryIO, prefix: bytes) -> tuple[BinaryIO, bytes]:
+    """The file as a stream of 8-bit text (UTF-16 with a BOM is converted), and its prefix.
+
+    Raises
+    ------
+    AcquisitionError
+        If the file is empty or binary (a NUL byte in its first MiB).
+    """
+    if prefix.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            text = (prefix + handle.read()).decode("utf-16")
+        except UnicodeDecodeError as err:
+            raise AcquisitionError(path, f"starts as UTF-16 but is not: {err.reason} at byte "
+                                   f"{err.start}") from err
+        stream = io.BytesIO(text.encode("utf-8"))
+        return stream, stream.read(_HEAD_BYTES)
+    nul = prefix.find(b"\x00")
+    if nul >= 0:
+        raise AcquisitionError(path, f"not a text CSV: binary content (a NUL byte at byte {nul})")
+    return handle, prefix
 
 
 def _line_starts(raw: bytes, offset: int) -> np.ndarray:
@@ -331,10 +357,30 @@ def _line_starts(raw: bytes, offset: int) -> np.ndarray:
     return np.concatenate([[0], np.flatnonzero(lf | lone_cr) + 1]) + offset
 
 
-def _tokenize(path: Path, raw: bytes, head: _Head, ncols: int) -> pd.DataFrame:
+def _blocks(stream: BinaryIO, start: int) -> Iterator[tuple[bytes, bool]]:
+    """Blocks of whole lines from ``start`` (the last may lack its line end), and if last."""
+    stream.seek(start)
+    carry = b""
+    while True:
+        block = stream.read(_CHUNK_BYTES)
+        if not block:
+            if carry:
+                yield carry, True
+            return
+        data = carry + block if carry else block
+        cut = data.rfind(b"\n") + 1 or data.rfind(b"\r") + 1
+        if cut == 0:
+            carry = data
+            continue
+        carry = data[cut:]
+        yield data[:cut], False
+
+
+def _tokenize(path: Path, block: bytes, head: _Head, ncols: int, first_line: int
+              ) -> pd.DataFrame:
     try:
         return pd.read_csv(
-            io.BytesIO(raw[head.data_offset :]),
+            io.BytesIO(block),
             sep=head.separator, decimal=head.decimal, header=None, names=range(ncols),
             skip_blank_lines=False, engine="c", encoding=head.encoding, index_col=False,
             encoding_errors="replace", quotechar='"', comment=None, low_memory=False,
@@ -343,7 +389,7 @@ def _tokenize(path: Path, raw: bytes, head: _Head, ncols: int) -> pd.DataFrame:
         match = _PANDAS_LINE.search(str(err))
         if match is None:
             raise AcquisitionError(path, f"cannot be parsed: {err}") from err
-        line = head.data_line + int(match[1]) - 1
+        line = first_line + int(match[1]) - 1
         raise AcquisitionError(
             path, f"{match[2]} fields where the header has {ncols}", line=line
         ) from err
@@ -351,21 +397,23 @@ def _tokenize(path: Path, raw: bytes, head: _Head, ncols: int) -> pd.DataFrame:
         return pd.DataFrame(columns=range(ncols))
 
 
-def _check_short_rows(
-    path: Path, raw: bytes, head: _Head, frame: pd.DataFrame, ncols: int
-) -> pd.DataFrame:
-    """Drop blank lines and a truncated last line; refuse other short lines."""
+def _check_short_rows(path: Path, block: bytes, head: _Head, frame: pd.DataFrame, ncols: int,
+                      first_line: int, final: bool) -> tuple[pd.DataFrame, int]:
+    """Drop blank lines and a truncated last line; refuse other short lines.
+
+    Returns the rows kept and the number of blank lines dropped.
+    """
     candidates = np.flatnonzero(frame[ncols - 1].isna().to_numpy())
     if candidates.size == 0:
-        return frame
-    starts = _line_starts(raw, head.data_offset)
+        return frame, 0
+    starts = _line_starts(block, 0)
     separator = head.separator.encode()
     drop: list[int] = []
     blanks = 0
     last = len(frame) - 1
     for row in candidates:
-        end = starts[row + 1] if row + 1 < len(starts) else len(raw)
-        text = raw[starts[row] : end].rstrip(b"\r\n")
+        end = starts[row + 1] if row + 1 < len(starts) else len(block)
+        text = block[starts[row] : end].rstrip(b"\r\n")
         if not text.strip():
             drop.append(int(row))
             blanks += 1
@@ -373,31 +421,129 @@ def _check_short_rows(
         fields = text.count(separator) + 1
         if fields >= ncols:
             continue
-        line = head.data_line + int(row)
-        if row == last:
+        line = first_line + int(row)
+        if final and row == last:
             drop.append(int(row))
             head.warnings.append(
                 f"line {line}: truncated last line ({fields} of {ncols} fields) dropped"
             )
             continue
         raise AcquisitionError(path, f"{fields} fields where the header has {ncols}", line=line)
+    return frame.drop(index=frame.index[drop]), blanks
+
+
+class _LineNumbers:
+    """The file line of each kept row, stored as the few places where lines were skipped.
+
+    Blank and dropped lines are rare: keeping where they occur, not a line number per
+    row, costs nothing next to the data.
+    """
+
+    def __init__(self, first_line: int) -> None:
+        self.first_line = first_line
+        self.size = 0
+        self.starts: list[int] = [0]  # row from which ...
+        self.offsets: list[int] = [0]  # ... this many lines had been skipped
+
+    def extend(self, lines: np.ndarray) -> None:
+        skipped = lines - self.first_line - (self.size + np.arange(lines.size))
+        changes = np.flatnonzero(np.diff(skipped, prepend=self.offsets[-1]))
+        self.starts.extend((self.size + changes).tolist())
+        self.offsets.extend(skipped[changes].tolist())
+        self.size += lines.size
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __getitem__(self, row: int) -> int:
+        at = int(np.searchsorted(self.starts, row, side="right")) - 1
+        return self.first_line + int(row) + self.offsets[at]
+
+
+class _Columns:
+    """The channels' values, filled block by block into arrays sized from an estimate.
+
+    Growing by a quarter when the estimate was short, and trimmed in place at the
+    end, the arrays are never held twice: the peak stays near their final size.
+    """
+
+    def __init__(self, channels: Iterable[str], rows: int, first_line: int) -> None:
+        self.arrays = {channel: np.empty(max(rows, 16)) for channel in channels}
+        self.lines = _LineNumbers(first_line)
+
+    def append(self, values: Mapping[str, np.ndarray], lines: np.ndarray) -> None:
+        start = len(self.lines)
+        needed = start + lines.size
+        for channel, array in self.arrays.items():
+            if needed > array.size:
+                array.resize(max(needed, int(array.size * 1.25)), refcheck=False)
+            array[start:needed] = values[channel]
+        self.lines.extend(lines)
+
+    def finish(self) -> tuple[dict[str, np.ndarray], _LineNumbers]:
+        for array in self.arrays.values():
+            array.resize(len(self.lines), refcheck=False)
+        return self.arrays, self.lines
+
+
+def _data_columns(path: Path, head: _Head, prefix: bytes) -> int:
+    """Fields per data line: the header's, or one more when every line ends with a separator."""
+    ncols = len(head.names)
+    first_data = next(_lines(prefix, head.data_offset), None)
+    if first_data is not None:
+        cells = _decode(first_data[1], head.encoding).split(head.separator)
+        if len(cells) > ncols:
+            if any(c.strip() for c in cells[ncols:]):
+                raise AcquisitionError(
+                    path, f"{len(cells)} fields where the header has {ncols}",
+                    line=head.data_line,
+                )
+            # Every data line ends with a separator the header does not have.
+            ncols = len(cells)
+    return ncols
+
+
+def _read_data(path: Path, stream: BinaryIO, head: _Head, ncols: int, found: Mapping[str, int],
+               size: int) -> tuple[dict[str, np.ndarray], _LineNumbers]:
+    """The channels' values (in N, mm, s) and the line of each row, block by block.
+
+    A last line without its line end was cut while the card wrote it, whatever it
+    parses as (``11.0`` may be the start of ``11.58905``): it is dropped, with a warning.
+    """
+    factors = {channel: _unit_factor(path, head, channel, k) for channel, k in found.items()}
+    columns: _Columns | None = None
+    row = 0  # data lines read so far
+    blanks = 0
+    for block, final in _blocks(stream, head.data_offset):
+        first_line = head.data_line + row
+        frame = _tokenize(path, block, head, ncols, first_line)
+        lines_in_block = len(frame)
+        frame, dropped = _check_short_rows(path, block, head, frame, ncols, first_line, final)
+        blanks += dropped
+        last = lines_in_block - 1
+        if final and not block.endswith((b"\n", b"\r")) and last in frame.index:
+            frame = frame.drop(index=last)
+            head.warnings.append(
+                f"line {first_line + last}: the file ends inside this line (no line end: the "
+                "acquisition stopped while writing it), so it was dropped"
+            )
+        if columns is None:
+            per_line = len(block) / max(lines_in_block, 1)
+            columns = _Columns(found, int((size - head.data_offset) / per_line * 1.02) + 16,
+                               head.data_line)
+        lines = first_line + frame.index.to_numpy(dtype=np.int64)
+        frame.index = lines - head.data_line  # rows numbered from the first data line
+        values = {}
+        for channel, k in found.items():
+            column = _numeric(path, head, frame, k)
+            values[channel] = column * factors[channel] if factors[channel] != 1.0 else column
+        columns.append(values, lines)
+        row += lines_in_block
     if blanks:
         head.warnings.append(f"{blanks} blank line(s) in the data skipped")
-    return frame.drop(index=frame.index[drop])
-
-
-def _drop_cut_last_row(
-    raw: bytes, head: _Head, frame: pd.DataFrame, used: list[int]
-) -> pd.DataFrame:
-    """Drop a last row cut in the middle of a number (acquisition stopped mid-write)."""
-    if raw.endswith(b"\n") or len(frame) == 0:
-        return frame
-    last = frame.iloc[-1]
-    if all(_is_number(str(last[k]), ".") for k in used if isinstance(last[k], str)):
-        return frame
-    line = head.data_line + int(frame.index[-1])
-    head.warnings.append(f"line {line}: truncated last line dropped")
-    return frame.iloc[:-1]
+    if columns is None:
+        return {channel: np.empty(0) for channel in found}, _LineNumbers(head.data_line)
+    return columns.finish()
 
 
 def _numeric(path: Path, head: _Head, frame: pd.DataFrame, k: int) -> np.ndarray:
@@ -471,38 +617,22 @@ def read_acquisition(
 
     """
     path = Path(path)
-    raw = _read_bytes(path)
-    if not raw.strip():
-        raise AcquisitionError(path, "the file is empty")
-    head = _parse_head(path, raw)
-    found = _map_columns(path, head, columns)
-
-    ncols = len(head.names)
-    first_data = next(_lines(raw, head.data_offset), None)
-    if first_data is not None:
-        cells = _decode(first_data[1], head.encoding).split(head.separator)
-        if len(cells) > ncols:
-            if any(c.strip() for c in cells[ncols:]):
-                raise AcquisitionError(
-                    path, f"{len(cells)} fields where the header has {ncols}",
-                    line=head.data_line,
-                )
-            # Every data line ends with a separator the header does not have.
-            ncols = len(cells)
-    frame = _tokenize(path, raw, head, ncols)
-    frame = _check_short_rows(path, raw, head, frame, ncols)
-    if len(frame) == 0:
+    with _open(path) as handle:
+        digest = hashlib.sha256()
+        stream, prefix = _text_stream(path, handle, handle.read(_HEAD_BYTES))
+        if not prefix.strip():
+            raise AcquisitionError(path, "the file is empty")
+        size = stream.seek(0, os.SEEK_END)
+        head = _parse_head(path, prefix if size <= len(prefix)
+                           else prefix[: prefix.rfind(b"\n") + 1])
+        found = _map_columns(path, head, columns)
+        ncols = _data_columns(path, head, prefix)
+        values, lines = _read_data(path, stream, head, ncols, found, size)
+        handle.seek(0)
+        for block in iter(lambda: handle.read(_CHUNK_BYTES), b""):
+            digest.update(block)
+    if len(lines) == 0:
         raise AcquisitionError(path, "no data rows after the header", line=head.header_line)
-
-    frame = _drop_cut_last_row(raw, head, frame, list(found.values()))
-    if len(frame) == 0:
-        raise AcquisitionError(path, "no data rows after the header", line=head.header_line)
-    values = {
-        channel: _numeric(path, head, frame, k) * _unit_factor(path, head, channel, k)
-        for channel, k in found.items()
-    }
-    lines = head.data_line + frame.index.to_numpy()
-
     time = _time_axis(path, head, values, lines)
     data_vars = {}
     for channel in CHANNELS:
@@ -518,7 +648,7 @@ def read_acquisition(
         if count:
             head.warnings.append(
                 f"{channel}: {count} missing value(s) in {runs} run(s), first at line "
-                f"{int(lines[first])}"
+                f"{lines[first]}"
             )
         data_vars[channel] = xr.Variable("time", values[channel], attrs)
     _note_normal_sign(data_vars["N"])
@@ -528,7 +658,7 @@ def read_acquisition(
     global_attrs.update(
         Conventions=CONVENTIONS,
         source=path.name,
-        source_sha256=hashlib.sha256(raw).hexdigest(),
+        source_sha256=digest.hexdigest(),
         source_format=(
             f"separator {head.separator!r}, decimal {head.decimal!r}, encoding "
             f"{head.encoding}, header line {head.header_line}, data from line {head.data_line}"
@@ -543,7 +673,7 @@ def read_acquisition(
 
 
 def _time_axis(
-    path: Path, head: _Head, values: dict[str, np.ndarray], lines: np.ndarray
+    path: Path, head: _Head, values: dict[str, np.ndarray], lines: _LineNumbers
 ) -> np.ndarray:
     rate = head.metadata.get("sample_rate_hz")
     if rate is not None and (
@@ -568,21 +698,21 @@ def _time_axis(
         missing = np.flatnonzero(~np.isfinite(time))
         if missing.size:
             raise AcquisitionError(
-                path, f"{label} is missing", line=int(lines[missing[0]])
+                path, f"{label} is missing", line=lines[int(missing[0])]
             )
-    steps = np.diff(time)
-    bad = np.flatnonzero(steps <= 0)
+    bad = np.flatnonzero(time[1:] <= time[:-1])  # no array of steps: time may be GBs
     if bad.size:
         k = int(bad[0]) + 1
-        what = "repeats" if steps[bad[0]] == 0 else "goes backwards from"
+        what = "repeats" if time[k] == time[k - 1] else "goes backwards from"
         raise AcquisitionError(
             path,
             f"{label} {time[k]:.9g} {what} {time[k - 1]:.9g} s on the line before; time must "
             "increase",
-            line=int(lines[k]),
+            line=lines[k],
         )
-    if label == "time" and rate is not None and steps.size:
-        median = float(np.median(steps))
+    if label == "time" and rate is not None and time.size > 1:
+        stride = max(1, time.size // 100_000)  # a sample of steps tells the rate as well
+        median = float(np.median(np.diff(time[::stride]))) / stride
         if abs(median * float(rate) - 1.0) > 0.01:
             head.warnings.append(
                 f"time column steps by {median:.6g} s but sample_rate_hz is {rate}; "
@@ -592,7 +722,8 @@ def _time_axis(
 
 
 def _note_normal_sign(normal: xr.Variable) -> None:
-    values = normal.values
+    # A strided sample of at most about a million values tells the sign as well as all.
+    values = normal.values[:: max(1, normal.size // 1_000_000)]
     finite = values[np.isfinite(values)]
     if finite.size == 0:
         return
