@@ -4,9 +4,17 @@
 #
 # One stage, one name: rule <stage> lives in workflow/rules/<stage>.smk, runs
 # `slipwave <stage>` and its code is the module the README's stage table names.
+import json
+
 from snakemake.utils import min_version, validate
 
-from slipwave.campaign import check_campaign, column_pairs, gross_edge_ratio, read_campaign
+from slipwave.campaign import (
+    check_campaign,
+    check_config_files,
+    column_pairs,
+    gross_edge_ratio,
+    read_campaign,
+)
 
 min_version("8.10")
 
@@ -15,10 +23,12 @@ configfile: "config/config.yaml"
 
 
 # The schema carries every default: validate() fills them into config.
+check_config_files(workflow.overwrite_configfiles)
 validate(config, "workflow/schemas/config.schema.json")
 campaign = read_campaign(config["tests"])
-validate(campaign, "workflow/schemas/tests.schema.json")
-check_campaign(config, campaign)
+# each row against the table's schema, errors naming the table's line
+with open(f"{workflow.basedir}/workflow/schemas/tests.schema.json") as schema:
+    check_campaign(config, campaign, json.load(schema))
 
 TEST_IDS = list(campaign["test_id"])
 FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -10,15 +10,26 @@ from typing import Any
 import pandas as pd
 
 from slipwave.errors import ConfigError
+from slipwave.validation import check, read_yaml
 
-TABLE_COLUMNS = ("test_id", "csv", "frames", "columns", "gross_edge_ratio")
+OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps")
+"""Columns a campaign table may leave out (their cells are then empty)."""
+
+
+def _table_lines(path: Path) -> list[int]:
+    """File line of the header and of each row, as pandas reads the table (comments skipped)."""
+    lines = []
+    with path.open(encoding="utf-8", errors="replace") as handle:
+        for number, text in enumerate(handle, start=1):
+            if text.strip() and not text.lstrip().startswith("#"):
+                lines.append(number)
+    return lines
 
 
 def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
     """Read a campaign table (tab separated, one row per test), indexed by ``test_id``.
 
-    Empty optional cells (``frames``, ``columns``, ``gross_edge_ratio``)
-    become empty strings.
+    Empty optional cells (:data:`OPTIONAL_COLUMNS`) become empty strings.
 
     Parameters
     ----------
@@ -28,13 +39,14 @@ def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        One row per test, all cells text, indexed by ``test_id``.
+        One row per test, all cells text, indexed by ``test_id``; ``attrs``
+        holds ``source`` (the path) and ``lines`` (test id -> its line in the file).
 
     Raises
     ------
     ConfigError
-        If the file is missing, lacks a required column or repeats a test id
-        (naming the line).
+        If the file is missing, has no test, lacks a required column or repeats
+        a test id (naming the line).
 
     """
     path = Path(path)
@@ -44,24 +56,30 @@ def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
         raise ConfigError(f"{path}: campaign table not found") from err
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as err:
         raise ConfigError(f"{path}: not a tab-separated campaign table: {err}") from err
+    lines = _table_lines(path)
     table.columns = [c.strip() for c in table.columns]
     for required in ("test_id", "csv"):
         if required not in table.columns:
             raise ConfigError(
-                f"{path}, line 1: no {required!r} column; the header names "
+                f"{path}, line {lines[0]}: no {required!r} column; the header names "
                 f"{', '.join(map(repr, table.columns))}"
             )
-    for optional in ("frames", "columns", "gross_edge_ratio"):
+    if len(table) == 0:
+        raise ConfigError(f"{path}: no test: the table has a header but no row")
+    for optional in OPTIONAL_COLUMNS:
         if optional not in table.columns:
             table[optional] = ""
     table = table.apply(lambda column: column.str.strip())
+    rows = lines[1 : 1 + len(table)]
     repeated = table["test_id"].duplicated()
     if repeated.any():
         row = int(repeated.to_numpy().argmax())
         raise ConfigError(
-            f"{path}, line {row + 2}: test_id {table['test_id'].iloc[row]!r} appears twice"
+            f"{path}, line {rows[row]}: test_id {table['test_id'].iloc[row]!r} appears twice"
         )
-    return table.set_index("test_id", drop=False)
+    table = table.set_index("test_id", drop=False)
+    table.attrs = {"source": str(path), "lines": dict(zip(table["test_id"], rows, strict=True))}
+    return table
 
 
 def column_map(config: Mapping[str, Any], name: str) -> dict[str, str]:
@@ -153,8 +171,9 @@ def gross_edge_ratio(config: Mapping[str, Any], test: Mapping[str, str] | pd.Ser
     return ratio
 
 
-def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame) -> None:
-    """Check what the schemas cannot: the tests' column maps and per-test settings.
+def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
+                   schema: Mapping[str, Any] | None = None) -> None:
+    """Check each test of the campaign: its cells, its column map and its settings.
 
     Parameters
     ----------
@@ -162,16 +181,53 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame) -> None:
         The validated workflow config.
     campaign
         From :func:`read_campaign`.
+    schema
+        The table's schema (``workflow/schemas/tests.schema.json``): each row
+        is checked against it, and an error names the table's file and line.
 
     Raises
     ------
     ConfigError
-        Naming the test and what is wrong, before any job starts.
+        Naming the file, the line, the test and what is wrong, before any job starts.
 
     """
-    for _, test in campaign.iterrows():
+    source = campaign.attrs.get("source", "the campaign table")
+    lines = campaign.attrs.get("lines", {})
+    for test_id, test in campaign.iterrows():
+        where = f"{source}, line {lines[test_id]}" if test_id in lines else source
+        if schema is not None:
+            check(dict(test), dict(schema), source=f"{where} (test {test_id!r})")
         try:
             column_map(config, test["columns"])
+            gross_edge_ratio(config, test)
         except ConfigError as err:
-            raise ConfigError(f"test {test['test_id']!r}: {err}") from err
-        gross_edge_ratio(config, test)
+            raise ConfigError(f"{where}: {err}") from err
+
+
+def check_config_files(paths: Iterable[str | PathLike[str]]) -> None:
+    """Refuse config files given on the command line that do not name a campaign table.
+
+    Snakemake merges ``--configfile`` files over the workflow's own config: one
+    without ``tests`` would silently run the default campaign.
+
+    Parameters
+    ----------
+    paths
+        The ``--configfile`` files (Snakemake's ``workflow.overwrite_configfiles``).
+
+    Raises
+    ------
+    ConfigError
+        Naming the files, when none of them sets ``tests``.
+
+    """
+    paths = [Path(p) for p in paths]
+    if not paths:
+        return
+    for path in paths:
+        content, _ = read_yaml(path)
+        if isinstance(content, Mapping) and content.get("tests"):
+            return
+    names = ", ".join(map(str, paths))
+    raise ConfigError(f"{names}: no 'tests' entry naming the campaign table; without it the "
+                      "default campaign (config/config.yaml) would run instead")

@@ -11,6 +11,8 @@ come from :mod:`slipwave.defaults`.
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -26,6 +28,16 @@ def _column_pair(text: str) -> tuple[str, str]:
     if not equals or not header:
         raise argparse.ArgumentTypeError(f"expected NAME=CHANNEL, got {text!r}")
     return header, channel
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from err
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
 
 
 def _optional_float(text: str) -> float | None:
@@ -153,7 +165,9 @@ def _report(args: argparse.Namespace) -> None:
 def _simulate(args: argparse.Namespace) -> None:
     from slipwave.cache import DiskCache
     from slipwave.io import write_dataset
+    from slipwave.resources import require_memory
     from slipwave.solver import Coulomb, LoadPath, Slab, condense, describe_behaviour, simulate
+    from slipwave.solver.slab import condensation_memory
 
     slab = Slab(length=args.length, height=args.height, width=args.width,
                 youngs_modulus=args.youngs_modulus, poisson_ratio=args.poisson_ratio,
@@ -161,6 +175,8 @@ def _simulate(args: argparse.Namespace) -> None:
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
                     normal_control=args.normal_control, max_travel=args.max_travel,
                     travel_step=args.travel_step, machine_stiffness=args.machine_stiffness)
+    require_memory(condensation_memory(slab), f"simulating a slab of {args.elements} elements "
+                   f"and H = {args.height:g} mm", limit_gb=args.memory_limit)
     result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path,
                       condensed=condense(slab, store=DiskCache()))
     behaviour = describe_behaviour(result)
@@ -179,7 +195,7 @@ def _bench(args: argparse.Namespace) -> None:
     from slipwave.bench.generate import read_bench_config, write_campaign
 
     table = write_campaign(read_bench_config(args.config), args.output, seed=args.seed,
-                           progress=not args.quiet)
+                           progress=not args.quiet, memory_limit_gb=args.memory_limit)
     print(f"{args.config} -> {args.output} ({table.name})")
 
 
@@ -269,6 +285,9 @@ def build_parser() -> argparse.ArgumentParser:
                      "actuator, up to --max-travel in --travel-step steps")
     sim.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     sim.add_argument("--plot", type=Path, default=None, help="also draw the zones (PNG, SVG)")
+    sim.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
+                     help="refuse a run whose estimated memory exceeds this (default: "
+                     "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     sim.set_defaults(run=_simulate)
 
     bench = commands.add_parser(
@@ -280,6 +299,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("-o", "--output", type=Path, required=True, help="campaign folder")
     bench.add_argument("--seed", type=int, default=0, help="noise seed of the first test (0)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
+                       help="refuse a test whose estimated memory exceeds this (default: "
+                       "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     bench.set_defaults(run=_bench)
 
     detect = commands.add_parser(
@@ -326,7 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     kymo.add_argument("frames", type=Path, help="video file, image folder or TIFF stack")
     kymo.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
-    kymo.add_argument("--length", type=float, default=default.CONTACT_LENGTH_MM,
+    kymo.add_argument("--length", type=_positive_float, default=default.CONTACT_LENGTH_MM,
                       help="contact length, mm (%(default)s)")
     kymo.add_argument("--band", type=float, nargs=2, default=list(default.BAND_MM),
                       metavar=("LOW", "HIGH"), help="band above the interface, mm (%(default)s)")
@@ -334,7 +356,7 @@ def build_parser() -> argparse.ArgumentParser:
                       metavar=("ROW", "LEFT", "RIGHT"),
                       help="interface row and the contact's end columns, px (found if not "
                       "given)")
-    kymo.add_argument("--fps", type=float, default=None,
+    kymo.add_argument("--fps", type=_positive_float, default=None,
                       help="frame rate of sources without timestamps")
     kymo.add_argument("--keep-partial", action="store_true",
                       help="on a damaged video, keep the frames before the damage")
@@ -374,16 +396,46 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        0 on success, 1 when slipwave reported an error.
+        0 on success, 1 when slipwave reported an error in the input, 2 for an
+        internal error (its traceback goes to a log file named on stderr), 130
+        when interrupted (SIGINT or SIGTERM).
 
     """
     args = build_parser().parse_args(argv)
+    previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         args.run(args)
     except SlipwaveError as err:
         print(f"slipwave: error: {err}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print("slipwave: interrupted; nothing half-written was kept", file=sys.stderr)
+        return 130
+    except Exception as err:  # a bug, not bad input: one line here, the traceback in a log
+        log = _crash_log(err)
+        print(f"slipwave: internal error ({type(err).__name__}: {err}); the full traceback "
+              f"is in {log}; please report it with that file", file=sys.stderr)
+        return 2
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+def _terminate(signum: int, frame: object) -> None:
+    # SIGTERM (a scheduler's or Snakemake's stop) unwinds like Ctrl-C: every output being
+    # written is removed by its atomic_output on the way out.
+    raise KeyboardInterrupt
+
+
+def _crash_log(err: BaseException) -> Path:
+    import tempfile
+    import traceback
+
+    fd, name = tempfile.mkstemp(prefix="slipwave-crash-", suffix=".log")
+    with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        handle.write(f"slipwave {__version__}, command line: {sys.argv!r}\n\n")
+        handle.write("".join(traceback.format_exception(err)))
+    return Path(name)
 
 
 if __name__ == "__main__":

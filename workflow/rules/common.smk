@@ -23,6 +23,11 @@ def report_inputs(wildcards):
     return inputs
 
 
+def frame_rate_option(wildcards):
+    fps = test_row(wildcards)["fps"]
+    return f"--fps {fps}" if fps else ""
+
+
 def video_options(wildcards, input):
     if "kymograph" not in input.keys():
         return ""

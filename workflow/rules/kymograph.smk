@@ -9,8 +9,9 @@ rule kymograph:
     params:
         length=config["video"]["length_mm"],
         band=config["video"]["band_mm"],
+        fps=frame_rate_option,
     conda:
         "../envs/slipwave.yaml"
     shell:
         "slipwave kymograph {input.frames:q} -o {output:q} --length {params.length} "
-        "--band {params.band[0]} {params.band[1]} > {log:q} 2>&1"
+        "--band {params.band[0]} {params.band[1]} {params.fps} > {log:q} 2>&1"

@@ -12,7 +12,7 @@ truth beside them.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -21,7 +21,6 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 import xarray as xr
-import yaml
 from tqdm import tqdm
 
 from slipwave.bench.camera import Camera, Photoelastic, write_image_sequence, write_video
@@ -43,9 +42,12 @@ from slipwave.defaults import (
     SLAB_WIDTH_MM,
     YOUNGS_MODULUS_MPA,
 )
-from slipwave.errors import ConfigError, SlipwaveError
+from slipwave.errors import SlipwaveError
 from slipwave.io import atomic_output, write_acquisition
+from slipwave.resources import require_memory
 from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
+from slipwave.solver.slab import condensation_memory
+from slipwave.validation import check, load_schema, read_yaml
 
 LED_DURATION = 0.2  # s the sync LED stays lit
 FRONT_WIDTH = 4.0  # mm over which a wave front blends the states before and after it
@@ -88,6 +90,11 @@ class BenchTest:
     flavour: Literal["canonical", "vendor"] = "canonical"
     video: Literal["ffv1", "vp9", "png", "none"] = "vp9"
     camera: Camera = field(default_factory=Camera)
+
+    def __post_init__(self) -> None:
+        # the same rules as a campaign YAML's (bench.schema.json), for tests made in Python
+        check(asdict(self), load_schema("bench")["$defs"]["test"],
+              source=f"bench test {self.test_id!r}")
 
     def slab(self) -> Slab:
         """The slab of this test.
@@ -146,7 +153,8 @@ class BenchResult:
         yield from _render(self)
 
 
-def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
+def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | None = None
+                  ) -> BenchResult:
     """Generate one test in memory: recording, truth and a frame iterator.
 
     Parameters
@@ -155,6 +163,9 @@ def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
         The test.
     seed
         Noise seed (card and camera).
+    memory_limit_gb
+        Refuse a test whose simulation would need more (GB); ``None``:
+        :func:`slipwave.resources.require_memory`'s default.
 
     Returns
     -------
@@ -168,6 +179,9 @@ def simulate_test(spec: BenchTest, *, seed: int = 0) -> BenchResult:
     ('demo', 4000)
     """
     slab = spec.slab()
+    require_memory(condensation_memory(slab, recovery=spec.video != "none"),
+                   f"the virtual test {spec.test_id!r} ({spec.elements} elements, H = "
+                   f"{spec.height:g} mm)", limit_gb=memory_limit_gb)
     simulation = simulate(slab, spec.friction(), spec.load_path(),
                           condensed=condense(slab, store=DiskCache()))
     clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
@@ -433,25 +447,28 @@ def read_bench_config(path: str | PathLike[str]) -> list[BenchTest]:
     Raises
     ------
     ConfigError
-        If the file cannot be read as YAML or is not a mapping.
+        If the file cannot be read as YAML or breaks the bench schema
+        (``slipwave/schemas/bench.schema.json``), naming the line and the setting.
 
     """
-    try:
-        config = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
-        raise ConfigError(f"{path}: cannot be read as YAML: {err}") from err
-    if not isinstance(config, dict):
-        raise ConfigError(f"{path}: expected a mapping with 'tests'")
-    return load_tests(config)
+    config, line_of = read_yaml(path)
+    return load_tests(config, source=str(path), line_of=line_of)
 
 
-def load_tests(config: dict[str, Any]) -> list[BenchTest]:
+def load_tests(config: dict[str, Any], *, source: str = "the bench config",
+               line_of: Callable[[Sequence[str | int]], int | None] | None = None
+               ) -> list[BenchTest]:
     """Tests of a campaign config: ``defaults`` merged into each of ``tests``.
 
     Parameters
     ----------
     config
-        The campaign's mapping (``defaults``, ``tests``).
+        The campaign's mapping (``defaults``, ``tests``), checked against
+        ``slipwave/schemas/bench.schema.json``.
+    source
+        Where it came from, for error messages.
+    line_of
+        The line of a setting in the source (:func:`slipwave.validation.read_yaml`).
 
     Returns
     -------
@@ -464,10 +481,9 @@ def load_tests(config: dict[str, Any]) -> list[BenchTest]:
         If there is no test, an unknown setting or a repeated id.
 
     """
+    check(config, load_schema("bench"), source=source, line_of=line_of)
     defaults = dict(config.get("defaults") or {})
-    tests = config.get("tests")
-    if not tests:
-        raise SlipwaveError("the bench config lists no tests")
+    tests = config["tests"]
     specs = []
     for entry in tests:
         merged = {**defaults, **entry}
@@ -483,7 +499,8 @@ def load_tests(config: dict[str, Any]) -> list[BenchTest]:
 
 
 def write_campaign(
-    specs: list[BenchTest], folder: str | PathLike[str], *, seed: int = 0, progress: bool = True
+    specs: list[BenchTest], folder: str | PathLike[str], *, seed: int = 0, progress: bool = True,
+    memory_limit_gb: float | None = None,
 ) -> Path:
     """Write every test of a campaign and its table ``tests.tsv``; returns the table.
 
@@ -499,6 +516,8 @@ def write_campaign(
         Noise seed of the first test.
     progress
         Show progress bars.
+    memory_limit_gb
+        As in :func:`simulate_test`.
 
     Returns
     -------
@@ -509,7 +528,8 @@ def write_campaign(
     folder = Path(folder)
     rows = []
     for k, spec in enumerate(tqdm(specs, desc="virtual bench", unit="test", disable=not progress)):
-        paths = write_test(simulate_test(spec, seed=seed + k), folder, progress=progress)
+        result = simulate_test(spec, seed=seed + k, memory_limit_gb=memory_limit_gb)
+        paths = write_test(result, folder, progress=progress)
         video = paths.get("video")
         rows.append({"test_id": spec.test_id, "csv": paths["csv"].name,
                      "frames": video.name if video else "", "columns": ""})

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import tempfile
 from collections.abc import Iterator
@@ -18,7 +19,11 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     """Give a temporary path beside ``path`` and move it into place on success.
 
     The destination is written whole or not at all: a failure leaves any
-    previous file untouched and no partial file behind.
+    previous file untouched and no partial file behind. A process killed
+    while writing (SIGKILL; the ``slipwave`` command turns SIGTERM into a
+    clean exit) leaves its ``.NAME.XXXX.part`` file: the next write of the
+    same output removes it. Two processes writing the same output at once are
+    not supported (a workflow never does that).
 
     Parameters
     ----------
@@ -33,6 +38,8 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
+    for stale in target.parent.glob(f".{glob.escape(target.name)}.*.part"):
+        stale.unlink(missing_ok=True)
     fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
     os.close(fd)
     temporary = Path(name)

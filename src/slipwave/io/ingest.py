@@ -514,6 +514,7 @@ def _read_data(path: Path, stream: BinaryIO, head: _Head, ncols: int, found: Map
     columns: _Columns | None = None
     row = 0  # data lines read so far
     blanks = 0
+    infinities: dict[str, int] = {}
     for block, final in _blocks(stream, head.data_offset):
         first_line = head.data_line + row
         frame = _tokenize(path, block, head, ncols, first_line)
@@ -536,11 +537,17 @@ def _read_data(path: Path, stream: BinaryIO, head: _Head, ncols: int, found: Map
         values = {}
         for channel, k in found.items():
             column = _numeric(path, head, frame, k)
+            infinite = np.isinf(column)
+            if infinite.any():  # an overflowed reading is no value: counted as missing
+                column = np.where(infinite, np.nan, column)
+                infinities[channel] = infinities.get(channel, 0) + int(infinite.sum())
             values[channel] = column * factors[channel] if factors[channel] != 1.0 else column
         columns.append(values, lines)
         row += lines_in_block
     if blanks:
         head.warnings.append(f"{blanks} blank line(s) in the data skipped")
+    for channel, count in infinities.items():
+        head.warnings.append(f"{channel}: {count} infinite value(s) (inf) read as missing")
     if columns is None:
         return {channel: np.empty(0) for channel in found}, _LineNumbers(head.data_line)
     return columns.finish()

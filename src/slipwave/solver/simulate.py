@@ -126,6 +126,10 @@ class LoadPath:
     def __post_init__(self) -> None:
         if not (self.normal_load > 0 and self.tangential_step > 0 and self.normal_steps >= 1):
             raise SlipwaveError("normal_load, tangential_step and normal_steps must be positive")
+        for name in ("max_travel", "travel_step", "max_tangential_load"):
+            value = getattr(self, name)
+            if value is not None and not value > 0:
+                raise SlipwaveError(f"{name} must be positive, not {value:g}")
         if self.normal_control not in ("displacement", "force"):
             raise SlipwaveError(f"normal_control {self.normal_control!r}: displacement or force")
         if self.machine_stiffness is not None and not (

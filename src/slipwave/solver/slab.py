@@ -372,6 +372,43 @@ def _condense_sensors(schur: np.ndarray, n_contact: int) -> tuple[np.ndarray, np
     return 0.5 * (contact + contact.T), sensors
 
 
+def condensation_memory(slab: Slab, *, recovery: bool = False) -> int:
+    """Bytes that condensing the slab takes at its peak, estimated from its mesh.
+
+    The interior's response to the contact (two dense interior x contact
+    matrices) and the sparse factor of the interior (a band about as wide as a
+    mesh row) dominate; ``recovery`` adds the dense maps of
+    :func:`displacement_recovery` (the virtual bench's camera).
+
+    Parameters
+    ----------
+    slab
+        The slab.
+    recovery
+        Whether the displacement recovery is built too.
+
+    Returns
+    -------
+    int
+        The estimate, bytes (within a factor of about 2 of what is measured).
+
+    Examples
+    --------
+    >>> condensation_memory(Slab(elements=160)) < 200e6 < condensation_memory(Slab(elements=2000))
+    True
+    """
+    columns = slab.elements + 1
+    rows = slab.heights().size
+    kept = 2 * columns + 2
+    interior = max(2 * columns * rows - kept, 0)
+    dense = 2 * interior * kept * 8
+    factor = 2 * interior * 2 * columns * 8
+    total = dense + factor + 4 * kept * kept * 8
+    if recovery:
+        total += 2 * rows * columns * kept * 8
+    return int(total)
+
+
 def assemble_condensed(slab: Slab) -> Condensed:
     """Assemble the slab with scikit-fem and condense it (no cache).
 

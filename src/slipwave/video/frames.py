@@ -57,6 +57,11 @@ class FrameSource:
             return self._tiff_stack()
         return self._video()
 
+    def _warn(self, message: str) -> None:
+        # a source is iterated more than once (geometry, then kymograph): warn once
+        if message not in self.warnings:
+            self.warnings.append(message)
+
     def _check(self, image: np.ndarray, shape: tuple[int, ...] | None, where: str) -> None:
         if shape is not None and image.shape != shape:
             raise SlipwaveError(f"{where}: frame of {image.shape[1]} x {image.shape[0]} px, "
@@ -96,7 +101,7 @@ class FrameSource:
             message = f"{self.path}: damaged video after its last good frame, {last_good} ({err})"
             if not self.keep_partial:
                 raise SlipwaveError(message) from err
-            self.warnings.append(message + "; the frames before it were kept")
+            self._warn(message + "; the frames before it were kept")
         finally:
             container.close()
 
@@ -123,8 +128,8 @@ class FrameSource:
         for index, (image_path, number) in enumerate(zip(files, numbers, strict=True)):
             if previous is not None and number is not None and number > previous + 1:
                 missing = number - previous - 1
-                self.warnings.append(f"{self.path}: {missing} image(s) missing between "
-                                     f"numbers {previous} and {number}; skipped")
+                self._warn(f"{self.path}: {missing} image(s) missing between numbers "
+                           f"{previous} and {number}; skipped")
             previous = number
             image = _read_image(image_path)
             self._check(image, shape, str(image_path))

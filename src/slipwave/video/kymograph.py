@@ -70,6 +70,13 @@ class Geometry:
     right: float
     length: float
 
+    def __post_init__(self) -> None:
+        if not self.length > 0:
+            raise SlipwaveError(f"the contact length must be positive, not {self.length:g} mm")
+        if not self.right > self.left:
+            raise SlipwaveError(f"the contact's right end (column {self.right:g}) must be right "
+                                f"of its left end (column {self.left:g})")
+
     @property
     def scale(self) -> float:
         """Pixels per mm.
@@ -125,11 +132,18 @@ class Geometry:
         Raises
         ------
         SlipwaveError
-            If the band holds no row inside the frame.
+            If the band is empty, reaches above the frame or holds no row.
 
         """
+        if not 0 <= band_mm[0] < band_mm[1]:
+            raise SlipwaveError(f"the band {band_mm[0]:g}-{band_mm[1]:g} mm above the interface "
+                                "must start at 0 mm or above and end above its start")
         low = self.interface_row - band_mm[1] * self.scale
         high = self.interface_row - band_mm[0] * self.scale
+        if low < 0:
+            raise SlipwaveError(
+                f"the band {band_mm[0]:g}-{band_mm[1]:g} mm above the interface reaches above "
+                f"the frame, which shows {self.interface_row / self.scale:.1f} mm above it")
         rows = np.arange(int(np.floor(low)), int(np.ceil(high)))
         rows = rows[(rows >= 0) & (rows < self.interface_row)]
         if rows.size == 0:
@@ -191,6 +205,37 @@ def find_geometry(frames: Iterable[Frame], length: float, *, count: int = 300) -
                             "the geometry in the config")
     return Geometry(interface_row=interface, left=float(lit[0]), right=float(lit[-1] + 1),
                     length=float(length))
+
+
+def frame_gaps(times: np.ndarray, *, tolerance: float = 1.5) -> list[tuple[float, float, int]]:
+    """Where frames are missing: steps longer than ``tolerance`` times the usual one.
+
+    Parameters
+    ----------
+    times
+        Frame times, s, increasing.
+    tolerance
+        How many typical frame periods make a gap.
+
+    Returns
+    -------
+    list of tuple
+        (time of the frame before, time of the frame after, frames missing) per gap.
+
+    Examples
+    --------
+    >>> frame_gaps(np.r_[np.arange(10) * 0.04, 1.0 + np.arange(5) * 0.04])
+    [(0.36, 1.0, 15)]
+    """
+    steps = np.diff(times)
+    if steps.size < 2:
+        return []
+    period = float(np.median(steps))
+    if not period > 0:
+        return []
+    return [(round(float(times[k]), 6), round(float(times[k + 1]), 6),
+             round(float(steps[k] / period)) - 1)
+            for k in np.flatnonzero(steps > tolerance * period)]
 
 
 def kymograph(
@@ -264,8 +309,8 @@ def kymograph(
         window = image[max(top - 1, 0) : bottom + 1, max(first - 1, 0) : last + 1]
         window = window.astype(np.float32)
         if window.shape != (bottom - top + 2, last - first + 2):  # at the image's border
-            window = np.pad(window, ((top == 0, bottom == shape[0]),
-                                     (first == 0, last == shape[1])), mode="edge")
+            window = np.pad(window, ((int(top == 0), int(bottom == shape[0])),
+                                     (int(first == 0), int(last == shape[1]))), mode="edge")
         band = window[1:-1, 1:-1]
         # central differences, as numpy.gradient inside the window
         dx = 0.5 * (window[1:-1, 2:] - window[1:-1, :-2])
@@ -282,6 +327,13 @@ def kymograph(
         times.append(frame.time)
     if not times or full_scale is None:
         raise SlipwaveError("no frames: the kymograph is empty")
+    gaps = frame_gaps(np.array(times))
+    notes = getattr(frames, "warnings", None)
+    for start, end, missing in gaps:
+        message = (f"no frame between {start:.3f} s and {end:.3f} s of camera time (about "
+                   f"{missing} frames missing: skipped or lost); the kymograph has a hole there")
+        if isinstance(notes, list) and message not in notes:
+            notes.append(message)
     x = geometry.x(columns)
     return xr.Dataset(
         {
@@ -302,6 +354,8 @@ def kymograph(
             "x": ("x", x, {"units": "mm", "long_name": "position along the contact, "
                                                        "origin at its centre"}),
         },
-        attrs={"band_mm": list(band_mm), **{f"geometry_{k}": v
+        attrs={"band_mm": list(band_mm),
+               "frame_gaps": "; ".join(f"{a:.3f}-{b:.3f} s ({n} frames)" for a, b, n in gaps),
+               **{f"geometry_{k}": v
                                             for k, v in asdict(geometry).items()}},
     )
