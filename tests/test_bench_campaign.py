@@ -139,7 +139,7 @@ def test_cli_bench(tmp_path, capsys):
     assert (tmp_path / "out" / "truth" / "two_events.csv").exists()
     config.write_text("tests:\n  - test_id: one\n    colour: blue\n")
     assert main(["bench", str(config), "-o", str(tmp_path / "bad"), "--quiet"]) == 1
-    assert "bench test 'one'" in capsys.readouterr().err
+    assert "tests[0] (test 'one')" in capsys.readouterr().err
 
 
 def test_frames_as_image_sequence(tmp_path):

@@ -54,5 +54,5 @@ def test_gross_edge_ratio_per_test_wins():
 def test_check_campaign_names_the_test_with_an_unknown_map(write):
     table = read_campaign(write("test_id\tcsv\tcolumns\na\tx.csv\nb\ty.csv\tde\n", "t.tsv"))
     config = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {"fr": {"Temps": "time"}}}
-    with pytest.raises(ConfigError, match=r"test 'b': column map 'de' is not in the config"):
+    with pytest.raises(ConfigError, match=r"t.tsv, line 3 \(test 'b'\): column map 'de' is not"):
         check_campaign(config, table)

@@ -195,8 +195,9 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
     lines = campaign.attrs.get("lines", {})
     for test_id, test in campaign.iterrows():
         where = f"{source}, line {lines[test_id]}" if test_id in lines else source
+        where += f" (test {test_id!r})"
         if schema is not None:
-            check(dict(test), dict(schema), source=f"{where} (test {test_id!r})")
+            check(dict(test), dict(schema), source=where)
         try:
             column_map(config, test["columns"])
             gross_edge_ratio(config, test)

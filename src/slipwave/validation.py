@@ -41,27 +41,39 @@ def load_schema(name: str) -> dict[str, Any]:
     return dict(json.loads(text))
 
 
-def describe_path(path: Sequence[str | int]) -> str:
+def describe_path(path: Sequence[str | int], document: Any = None) -> str:
     """A setting's place in a document, as a reader writes it.
 
     Parameters
     ----------
     path
         Keys and list indices from the top.
+    document
+        The document, to name a list entry by its ``test_id`` where it has one.
 
     Returns
     -------
     str
-        e.g. ``tests[1].camera.fps``; ``the top level`` for an empty path.
+        e.g. ``tests[1] (test 'hl050').camera.fps``; ``the top level`` for an
+        empty path.
 
     Examples
     --------
     >>> describe_path(["tests", 1, "camera", "fps"])
     'tests[1].camera.fps'
+    >>> describe_path(["tests", 0, "fs"], {"tests": [{"test_id": "hl050"}]})
+    "tests[0] (test 'hl050').fs"
     """
     text = ""
+    node = document
     for part in path:
         text += f"[{part}]" if isinstance(part, int) else f".{part}"
+        try:
+            node = node[part] if node is not None else None
+        except (KeyError, IndexError, TypeError):
+            node = None
+        if isinstance(part, int) and isinstance(node, dict) and "test_id" in node:
+            text += f" (test {node['test_id']!r})"
     return text.lstrip(".") or "the top level"
 
 
@@ -93,7 +105,7 @@ def check(instance: Any, schema: dict[str, Any], *, source: str,
     path = list(error.absolute_path)
     line = line_of(path) if line_of is not None else None
     where = f"{source}, line {line}" if line is not None else source
-    raise ConfigError(f"{where}: {describe_path(path)}: {error.message}")
+    raise ConfigError(f"{where}: {describe_path(path, instance)}: {error.message}")
 
 
 def read_yaml(path: str | PathLike[str]) -> tuple[Any, Callable[[Sequence[str | int]], int | None]]:
