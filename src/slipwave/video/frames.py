@@ -69,6 +69,7 @@ class FrameSource:
 
     def _video(self) -> Iterator[Frame]:
         last_good = "none (the first frame is damaged)"
+        lost: list[str] = []
         shape = None
         try:
             container = av.open(str(self.path))
@@ -80,7 +81,7 @@ class FrameSource:
             stream = container.streams.video[0]
             stream.thread_type = "AUTO"
             declared = container.duration / av.time_base if container.duration else None
-            time, period = float("nan"), 0.0
+            time, period, nominal = float("nan"), 0.0, 0.0
             for index, frame in enumerate(self._decode(container, stream)):
                 image = _grey(frame)
                 where = f"{self.path}, frame {index}"
@@ -90,6 +91,9 @@ class FrameSource:
                 time = float(frame.time) if frame.time is not None else (
                     index / self.fps if self.fps else float("nan"))
                 period = time - previous if index else 0.0
+                nominal = nominal or period
+                if nominal and period > 1.5 * nominal:  # the decoder skipped damaged frames
+                    lost.append(f"frames lost between {previous:.3f} s and {time:.3f} s")
                 yield Frame(index, time, image)
                 last_good = f"frame {index} at {time:.3f} s"
             # a file cut short ends cleanly for the demuxer: its header still says how long
@@ -98,7 +102,9 @@ class FrameSource:
                 raise av.InvalidDataError(1, f"the file ends at {time:.3f} s of the "
                                              f"{declared:.3f} s its header declares")
         except av.FFmpegError as err:
-            message = f"{self.path}: damaged video after its last good frame, {last_good} ({err})"
+            before = f" ({'; '.join(lost)} before it)" if lost else ""
+            message = (f"{self.path}: damaged video after its last good frame, {last_good}"
+                       f"{before} ({err})")
             if not self.keep_partial:
                 raise SlipwaveError(message) from err
             self._warn(message + "; the frames before it were kept")
