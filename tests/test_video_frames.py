@@ -127,7 +127,7 @@ def test_kymograph_band_and_reference():
     assert kymo["intensity"].values[3, :20] == pytest.approx(180 / 255)
     assert kymo["motion"].values[3, :20] == pytest.approx(180 / 255)
     assert np.allclose(kymo["intensity"].values[3, 21:], 0.0)
-    with pytest.raises(SlipwaveError, match="reaches above the frame, which shows 30.0 mm"):
+    with pytest.raises(SlipwaveError, match=r"reaches above the frame, which shows 30\.0 mm"):
         kymograph(frames, geometry, band_mm=(50.0, 60.0))
 
 
