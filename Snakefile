@@ -22,8 +22,14 @@ min_version("8.10")
 configfile: "config/config.yaml"
 
 
-# The schema carries every default: validate() fills them into config.
-check_config_files(workflow.overwrite_configfiles)
+# Each config file against the schema first (errors name its line), then the merged
+# config: the schema carries every default, and validate() fills them in.
+with open(f"{workflow.basedir}/workflow/schemas/config.schema.json") as schema:
+    check_config_files(
+        [*workflow.configfiles, *workflow.overwrite_configfiles],
+        json.load(schema),
+        command_line=workflow.overwrite_configfiles,
+    )
 validate(config, "workflow/schemas/config.schema.json")
 campaign = read_campaign(config["tests"])
 # each row against the table's schema, errors naming the table's line

@@ -195,8 +195,8 @@ def test_9_campaign_tables_and_configs(write, tmp_path):
     config = tmp_path / "mine.yaml"
     config.write_text("column_maps: {}\n")
     with pytest.raises(ConfigError, match=r"mine\.yaml: no 'tests' entry naming the campaign"):
-        check_config_files([config])
-    check_config_files([])  # the workflow's own config only: fine
+        check_config_files([config], command_line=[config])
+    check_config_files([config])  # the workflow's own config only: fine
 
 
 def test_10_binary_and_utf16_files(write):

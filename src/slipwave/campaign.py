@@ -205,30 +205,43 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
             raise ConfigError(f"{where}: {err}") from err
 
 
-def check_config_files(paths: Iterable[str | PathLike[str]]) -> None:
-    """Refuse config files given on the command line that do not name a campaign table.
+def check_config_files(paths: Iterable[str | PathLike[str]],
+                       schema: Mapping[str, Any] | None = None, *,
+                       command_line: Iterable[str | PathLike[str]] = ()) -> None:
+    """Check the workflow's config files one by one, before Snakemake merges them.
 
-    Snakemake merges ``--configfile`` files over the workflow's own config: one
-    without ``tests`` would silently run the default campaign.
+    Each file's own settings are checked against the config schema, so that an
+    error names the file and the line (Snakemake's check of the merged config
+    cannot). And Snakemake merges ``--configfile`` files over the workflow's own
+    config: if none of those sets ``tests``, the default campaign would silently run.
 
     Parameters
     ----------
     paths
+        Every config file (the workflow's own and the command line's).
+    schema
+        ``workflow/schemas/config.schema.json``; ``None``: only the rule on ``tests``.
+    command_line
         The ``--configfile`` files (Snakemake's ``workflow.overwrite_configfiles``).
 
     Raises
     ------
     ConfigError
-        Naming the files, when none of them sets ``tests``.
+        Naming the file, the line, the setting and what is wrong.
 
     """
-    paths = [Path(p) for p in paths]
-    if not paths:
+    if schema is not None:
+        settings = {key: value for key, value in schema.items() if key != "required"}
+        for path in paths:
+            content, line_of = read_yaml(path)
+            check(content or {}, settings, source=str(path), line_of=line_of)
+    given = [Path(p) for p in command_line]
+    if not given:
         return
-    for path in paths:
+    for path in given:
         content, _ = read_yaml(path)
         if isinstance(content, Mapping) and content.get("tests"):
             return
-    names = ", ".join(map(str, paths))
+    names = ", ".join(map(str, given))
     raise ConfigError(f"{names}: no 'tests' entry naming the campaign table; without it the "
                       "default campaign (config/config.yaml) would run instead")

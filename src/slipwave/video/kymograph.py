@@ -282,6 +282,17 @@ def kymograph(
     >>> float(kymo["intensity"].isel(time=2, x=15))
     1.0
     """
+    try:
+        return _kymograph(frames, geometry, band_mm, reference)
+    except SlipwaveError as err:
+        source = getattr(frames, "path", None)  # name the video where the message does not
+        if source is None or str(source) in str(err):
+            raise
+        raise SlipwaveError(f"{source}: {err}") from err
+
+
+def _kymograph(frames: Iterable[Frame], geometry: Geometry, band_mm: tuple[float, float],
+               reference: np.ndarray | None) -> xr.Dataset:
     rows = geometry.band_rows(band_mm)
     columns = geometry.columns()
     top, bottom = int(rows[0]), int(rows[-1]) + 1
