@@ -70,6 +70,16 @@ def test_2_b_line_numbers_hold_across_blocks(write, monkeypatch):
         read_acquisition(write(text))
 
 
+def test_2_c_a_long_line_at_the_start_of_any_block_is_refused(write, monkeypatch):
+    monkeypatch.setattr(ingest_module, "_CHUNK_BYTES", 64)  # pandas only warns on a block's first
+    rows = [f"{k / 100:.2f},{k},-80,0,0,0\n" for k in range(30)]
+    for k in range(len(rows)):
+        longer = [*rows[:k], rows[k].rstrip("\n") + ",7\n", *rows[k + 1 :]]
+        path = write("time [s],T [N],N [N],DG [mm],DD [mm],DT [mm]\n" + "".join(longer))
+        with pytest.raises(SlipwaveError, match=rf"line {k + 2}: 7 fields where the header has 6"):
+            read_acquisition(path)
+
+
 def test_3_simulate_and_bench_refuse_what_the_machine_cannot_hold(tmp_path, capsys):
     assert main(["simulate", "--fs", "1", "--elements", "100000", "-o",
                  str(tmp_path / "s.nc")]) == 1

@@ -16,25 +16,18 @@ OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps")
 """Columns a campaign table may leave out (their cells are then empty)."""
 
 
-def _table_lines(path: Path) -> list[int]:
-    """File line of the header and of each row, as pandas reads the table (comments skipped)."""
-    lines = []
-    with path.open(encoding="utf-8", errors="replace") as handle:
-        for number, text in enumerate(handle, start=1):
-            if text.strip() and not text.lstrip().startswith("#"):
-                lines.append(number)
-    return lines
-
-
 def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
-    """Read a campaign table (tab separated, one row per test), indexed by ``test_id``.
+    r"""Read a campaign table (tab separated, one row per test), indexed by ``test_id``.
 
-    Empty optional cells (:data:`OPTIONAL_COLUMNS`) become empty strings.
+    Lines whose first character (after blanks) is ``#`` are comments and blank
+    lines are skipped; the first other line is the header. Cells are stripped of
+    surrounding blanks; missing trailing cells and the optional columns
+    (:data:`OPTIONAL_COLUMNS`) are empty strings.
 
     Parameters
     ----------
     path
-        The table.
+        The table (UTF-8).
 
     Returns
     -------
@@ -45,40 +38,73 @@ def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
     Raises
     ------
     ConfigError
-        If the file is missing, has no test, lacks a required column or repeats
-        a test id (naming the line).
+        If the file is missing or not text, has no test, lacks a required
+        column, has a row longer than its header or repeats a test id (naming
+        the line).
 
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> table = pathlib.Path(tempfile.mkdtemp()) / "tests.tsv"
+    >>> _ = table.write_text("# my campaign\ntest_id\tcsv\nrun01\t/data/run01.csv\n")
+    >>> campaign = read_campaign(table)
+    >>> campaign.loc["run01", "csv"], campaign.loc["run01", "frames"], campaign.attrs["lines"]
+    ('/data/run01.csv', '', {'run01': 3})
     """
     path = Path(path)
     try:
-        table = pd.read_csv(path, sep="\t", dtype=str, comment="#", keep_default_na=False)
+        raw = path.read_bytes()
     except FileNotFoundError as err:
         raise ConfigError(f"{path}: campaign table not found") from err
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{path}: not a tab-separated campaign table: {err}") from err
-    lines = _table_lines(path)
-    table.columns = [c.strip() for c in table.columns]
+    except IsADirectoryError as err:
+        raise ConfigError(f"{path}: is a directory, not a campaign table") from err
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot be read: {err.strerror}") from err
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = 1 + raw[: err.start].count(b"\n")
+        raise ConfigError(f"{path}, line {line}: not UTF-8 text ({err.reason})") from err
+    rows: list[list[str]] = []
+    lines: list[int] = []
+    for number, line_text in enumerate(text.splitlines(), start=1):
+        if not line_text.strip() or line_text.lstrip().startswith("#"):
+            continue
+        cells = [cell.strip() for cell in line_text.split("\t")]
+        if rows:
+            width = len(rows[0])
+            if any(cells[width:]):
+                raise ConfigError(f"{path}, line {number}: {len(cells)} cells where the header "
+                                  f"has {width}")
+            cells = cells[:width] + [""] * (width - len(cells))
+        rows.append(cells)
+        lines.append(number)
+    if not rows:
+        raise ConfigError(f"{path}: no header row: the table is empty or only comments")
+    header = rows[0]
     for required in ("test_id", "csv"):
-        if required not in table.columns:
+        if required not in header:
             raise ConfigError(
                 f"{path}, line {lines[0]}: no {required!r} column; the header names "
-                f"{', '.join(map(repr, table.columns))}"
+                f"{', '.join(map(repr, header))}"
             )
-    if len(table) == 0:
+    repeated = next((name for k, name in enumerate(header) if name in header[:k]), None)
+    if repeated is not None:
+        raise ConfigError(f"{path}, line {lines[0]}: column {repeated!r} appears twice")
+    if len(rows) == 1:
         raise ConfigError(f"{path}: no test: the table has a header but no row")
+    table = pd.DataFrame(rows[1:], columns=header, dtype=str)
     for optional in OPTIONAL_COLUMNS:
         if optional not in table.columns:
             table[optional] = ""
-    table = table.apply(lambda column: column.str.strip())
-    rows = lines[1 : 1 + len(table)]
-    repeated = table["test_id"].duplicated()
-    if repeated.any():
-        row = int(repeated.to_numpy().argmax())
-        raise ConfigError(
-            f"{path}, line {rows[row]}: test_id {table['test_id'].iloc[row]!r} appears twice"
-        )
+    seen: dict[str, int] = {}
+    for test_id, number in zip(table["test_id"], lines[1:], strict=True):
+        if test_id in seen:
+            raise ConfigError(f"{path}, line {number}: test_id {test_id!r} appears twice "
+                              f"(first on line {seen[test_id]})")
+        seen[test_id] = number
     table = table.set_index("test_id", drop=False)
-    table.attrs = {"source": str(path), "lines": dict(zip(table["test_id"], rows, strict=True))}
+    table.attrs = {"source": str(path), "lines": seen}
     return table
 
 

@@ -24,6 +24,7 @@ import io
 import os
 import re
 import unicodedata
+import warnings
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from os import PathLike
@@ -379,12 +380,20 @@ def _blocks(stream: BinaryIO, start: int) -> Iterator[tuple[bytes, bool]]:
 def _tokenize(path: Path, block: bytes, head: _Head, ncols: int, first_line: int
               ) -> pd.DataFrame:
     try:
-        return pd.read_csv(
-            io.BytesIO(block),
-            sep=head.separator, decimal=head.decimal, header=None, names=range(ncols),
-            skip_blank_lines=False, engine="c", encoding=head.encoding, index_col=False,
-            encoding_errors="replace", quotechar='"', comment=None, low_memory=False,
-        )
+        with warnings.catch_warnings():
+            # pandas truncates a first line longer than the names, with only a warning
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            return pd.read_csv(
+                io.BytesIO(block),
+                sep=head.separator, decimal=head.decimal, header=None, names=range(ncols),
+                skip_blank_lines=False, engine="c", encoding=head.encoding, index_col=False,
+                encoding_errors="replace", quotechar='"', comment=None, low_memory=False,
+            )
+    except pd.errors.ParserWarning as err:
+        first = block.split(b"\n", 1)[0].rstrip(b"\r")
+        fields = first.count(head.separator.encode()) + 1
+        raise AcquisitionError(path, f"{fields} fields where the header has {ncols}",
+                               line=first_line) from err
     except pd.errors.ParserError as err:
         match = _PANDAS_LINE.search(str(err))
         if match is None:
