@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from slipwave.errors import SlipwaveError
-from slipwave.events.summary import load_ratio
+from slipwave.events.summary import PHASES, load_ratio
 from slipwave.io import CHANNELS
 
 PHASE_COLOURS = {"normal_loading": "#bbbbbb", "partial_slip": "#8fbc8f",
@@ -27,15 +27,14 @@ KIND_MARKERS = {"gross_slip": ("v", "#b22222"), "partial_slip": ("v", "#2e8b57")
 
 
 def _phase_runs(phase: xr.DataArray) -> list[tuple[str, float, float]]:
-    """(label, start, end) of each run of equal labels, stick left out."""
-    labels = phase.values.astype(str)
+    """(label, start, end) of each run of equal phases, stick left out."""
+    codes = phase.values
     time = phase["time"].values
-    change = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+    change = np.flatnonzero(codes[1:] != codes[:-1]) + 1
     starts = np.concatenate([[0], change])
-    ends = np.concatenate([change, [labels.size]]) - 1
-    return [(labels[a], float(time[a]), float(time[b])) for a, b in zip(starts, ends,
-                                                                         strict=True)
-            if labels[a] != "stick"]
+    ends = np.concatenate([change, [codes.size]]) - 1
+    return [(PHASES[codes[a]], float(time[a]), float(time[b]))
+            for a, b in zip(starts, ends, strict=True) if PHASES[codes[a]] != "stick"]
 
 
 def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> Figure:

@@ -82,12 +82,14 @@ def normal_loading_end(recording: xr.Dataset, *, plateau_fraction: float = 0.98)
 
 
 def segment_phases(recording: xr.Dataset, events: pd.DataFrame) -> xr.DataArray:
-    """A phase label for every sample: normal loading, stick, partial or gross slip.
+    """The phase of every sample: normal loading, stick, partial or gross slip.
 
     Samples before |N| reaches its plateau (:func:`normal_loading_end`) are
     ``normal_loading``; samples from an event's onset to its end take the
     event's kind (gross wins where events overlap; unclassified events count
-    as partial slips); the rest is ``stick``.
+    as partial slips); the rest is ``stick``. Phases are CF flags: one byte per
+    sample, the codes of :data:`PHASES` (a label per sample would take seven
+    times the memory of the signal); :func:`phase_labels` gives the labels.
 
     Parameters
     ----------
@@ -99,30 +101,32 @@ def segment_phases(recording: xr.Dataset, events: pd.DataFrame) -> xr.DataArray:
     Returns
     -------
     xarray.DataArray
-        ``phase`` along ``time``, one of :data:`PHASES`.
+        ``phase`` along ``time``, int8 codes with CF ``flag_values`` and
+        ``flag_meanings`` (:data:`PHASES`).
 
     Examples
     --------
     >>> ds = xr.Dataset({"N": ("time", np.r_[-np.arange(5.0), np.full(10, -5.0)])},
     ...                 coords={"time": np.arange(15.0)})
     >>> events = pd.DataFrame({"kind": ["gross_slip"], "i_start": [9], "i_end": [11]})
-    >>> phase = segment_phases(ds, events).values.tolist()
+    >>> phase = phase_labels(segment_phases(ds, events)).tolist()
     >>> phase[4:6], phase[9:13]
     (['normal_loading', 'stick'], ['stick', 'gross_slip', 'gross_slip', 'stick'])
     """
     size = recording.sizes["time"]
-    label = np.full(size, "stick", dtype=object)
-    label[: normal_loading_end(recording)] = "normal_loading"
+    code = np.full(size, PHASES.index("stick"), dtype=np.int8)
+    code[: normal_loading_end(recording)] = PHASES.index("normal_loading")
     for kind in ("unclassified", "partial_slip", "gross_slip"):
         chosen = events[events["kind"] == kind]
+        value = PHASES.index("gross_slip" if kind == "gross_slip" else "partial_slip")
         for start, end in zip(chosen["i_start"], chosen["i_end"], strict=True):
-            label[int(start) + 1 : int(end) + 1] = "partial_slip" if kind != "gross_slip" \
-                else kind
-    phase = xr.DataArray(label.astype(str), dims="time", name="phase",
+            code[int(start) + 1 : int(end) + 1] = value
+    phase = xr.DataArray(code, dims="time", name="phase",
                          coords={"time": recording["time"]} if "time" in recording.coords
                          else None)
     phase.attrs = {"long_name": "phase of the test",
-                   "flag_values": " ".join(PHASES)}
+                   "flag_values": np.arange(len(PHASES), dtype=np.int8),
+                   "flag_meanings": " ".join(PHASES)}
     return phase
 
 
@@ -213,6 +217,23 @@ def wave_counts(events: pd.DataFrame | xr.Dataset) -> dict[str, int]:
     return counts
 
 
+def phase_labels(phase: xr.DataArray) -> np.ndarray:
+    """The label of each sample's phase (the codes of :func:`segment_phases` decoded).
+
+    Parameters
+    ----------
+    phase
+        From :func:`segment_phases` (or ``events.nc``).
+
+    Returns
+    -------
+    numpy.ndarray
+        One of :data:`PHASES` per sample.
+
+    """
+    return np.asarray(PHASES)[np.asarray(phase.values, dtype=np.intp)]
+
+
 def phase_durations(phase: xr.DataArray) -> dict[str, float]:
     """Time (s) spent in each phase: samples times the sampling interval.
 
@@ -229,8 +250,8 @@ def phase_durations(phase: xr.DataArray) -> dict[str, float]:
     """
     time = phase["time"].values.astype(float)
     interval = float(np.median(np.diff(time))) if time.size > 1 else 0.0
-    labels = phase.values
-    return {name: float((labels == name).sum()) * interval for name in PHASES}
+    counts = np.bincount(np.asarray(phase.values, dtype=np.intp), minlength=len(PHASES))
+    return {name: float(counts[k]) * interval for k, name in enumerate(PHASES)}
 
 
 def summary_row(test_id: str, dataset: xr.Dataset) -> dict[str, object]:
