@@ -21,7 +21,7 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     The destination is written whole or not at all: a failure leaves any
     previous file untouched and no partial file behind. A process killed
     while writing (SIGKILL; the ``slipwave`` command turns SIGTERM into a
-    clean exit) leaves its ``.NAME.XXXX.part`` file: the next write of the
+    clean exit) leaves its ``.NAME.<random>.part`` file: the next write of the
     same output removes it. Two processes writing the same output at once are
     not supported (a workflow never does that).
 
