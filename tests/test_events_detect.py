@@ -74,8 +74,13 @@ def test_dead_or_flat_load_channels(saw):
     with pytest.raises(SlipwaveError, match=r"raw/test7.csv: channel T is missing or has no "
                                             r"finite value"):
         detect_events(dead)
-    with pytest.raises(SlipwaveError, match="channel N is missing"):
-        detect_events(recording.drop_vars("N"))
+    force_only = detect_events(recording.drop_vars(["N", "DG", "DD"]))  # a T-only record
+    assert len(force_only) > 0 and set(force_only["kind"]) == {"unclassified"}
+    assert force_only["ratio_before"].isna().all()
+    assert "no usable N channel" in force_only.attrs["warnings"]
+    phase = phase_labels(segment_phases(recording.drop_vars(["N", "DG", "DD"]), force_only))
+    assert "normal_loading" not in phase and "partial_slip" not in phase
+    assert (phase == "unclassified_slip").sum() > 0
     flat = detect_events(recording.assign(T=recording["T"] * 0 + 12.0))
     assert flat.empty and list(flat.columns) == list(EVENT_COLUMNS)
     phase = segment_phases(recording, flat)

@@ -9,9 +9,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
+from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
 from slipwave.campaign import read_campaign
 from slipwave.io import read_dataset
 
@@ -87,6 +89,26 @@ def test_column_map_from_config(workdir):
     run = snakemake(workdir, "--cores", "1", "--configfile", "odd.yaml")
     assert run.returncode == 0, run.stderr
     assert read_dataset(workdir / "results/odd/recording.nc")["time"].values.tolist() == [0, 0.01]
+
+
+def test_force_only_recording_runs_to_a_page_and_a_summary_row(workdir):
+    """A spring-slider's record: time and T only (issue 13)."""
+    saw = sawtooth_recording(SawtoothBench(), seed=3)
+    lines = "".join(f"{a:.2f},{b:.4f}\n" for a, b in zip(saw["time"].values, saw["T"].values,
+                                                        strict=True))
+    (workdir / "raw_data" / "force.csv").write_text("time [s],T [N]\n" + lines)
+    (workdir / "force.tsv").write_text("test_id\tcsv\nforce\traw_data/force.csv\n")
+    (workdir / "force.yaml").write_text("tests: force.tsv\n")
+    run = snakemake(workdir, "--cores", "2", "--configfile", "force.yaml")
+    assert run.returncode == 0, run.stderr
+    summary = pd.read_csv(workdir / "results/summary.csv").set_index("test_id")
+    row = summary.loc["force"]
+    assert row["unclassified_waves"] > 0 and row["unclassified_slip_s"] > 0
+    assert row["partial_slip_waves"] == row["gross_slip_waves"] == 0
+    assert row["partial_slip_s"] == row["gross_slip_s"] == 0
+    assert np.isnan(row["static_ratio_mean"]) and "no usable N channel" in row["warnings"]
+    page = (workdir / "reports/force.html").read_text()
+    assert "T drops of unknown kind" in page and "No gross slip is known" in page
 
 
 @pytest.mark.parametrize(

@@ -21,7 +21,7 @@ from slipwave.events.summary import PHASES, load_ratio
 from slipwave.io import CHANNELS
 
 PHASE_COLOURS = {"normal_loading": "#bbbbbb", "partial_slip": "#8fbc8f",
-                 "gross_slip": "#e07b6a"}
+                 "gross_slip": "#e07b6a", "unclassified_slip": "#9fb4c7"}
 KIND_MARKERS = {"gross_slip": ("v", "#b22222"), "partial_slip": ("v", "#2e8b57"),
                 "unclassified": ("v", "#555555")}
 
@@ -58,9 +58,11 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
 
     """
     panels = [c for c in CHANNELS if c in recording.data_vars]
+    with_ratio = "N" in panels  # a force-only record has no T/|N|
+    rows = len(panels) + with_ratio
     with sns.axes_style("whitegrid"):
-        fig = Figure(figsize=(9.0, 1.6 * (len(panels) + 1) + 0.6), layout="constrained")
-        axes = fig.subplots(len(panels) + 1, 1, sharex=True)
+        fig = Figure(figsize=(9.0, 1.6 * rows + 0.6), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(rows, 1, sharex=True))
     time = recording["time"].values
     colours = sns.color_palette("deep", len(panels) + 1)
     for ax, name, colour in zip(axes, panels, colours, strict=False):
@@ -68,10 +70,11 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
         ax.plot(time, variable.values, lw=0.8, color=colour)
         ax.set_ylabel(f"{name} [{variable.attrs.get('units', '?')}]")
         ax.set_title(variable.attrs.get("long_name", name), fontsize=9, loc="left")
-    ratio = load_ratio(recording)
-    axes[-1].plot(time, ratio.values, lw=0.8, color=colours[-1])
-    axes[-1].set_ylabel("T/|N| [-]")
-    axes[-1].set_title(ratio.attrs["long_name"], fontsize=9, loc="left")
+    if with_ratio:
+        ratio = load_ratio(recording)
+        axes[-1].plot(time, ratio.values, lw=0.8, color=colours[-1])
+        axes[-1].set_ylabel("T/|N| [-]")
+        axes[-1].set_title(ratio.attrs["long_name"], fontsize=9, loc="left")
     axes[-1].set_xlabel("time [s]")
     if events is not None:
         runs = _phase_runs(events["phase"])
@@ -86,8 +89,9 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
                     axes[panels.index("T")].plot(
                         events["t_start"].values[chosen], events["T_before"].values[chosen],
                         marker, color=colour, ms=4, label=kind.replace("_", " "))
+            shown = {label for label, _, _ in runs}
             handles = [Patch(color=PHASE_COLOURS[k], alpha=0.35, label=k.replace("_", " "))
-                       for k in PHASE_COLOURS]
+                       for k in PHASE_COLOURS if k in shown]
             axes[panels.index("T")].legend(
                 handles=axes[panels.index("T")].get_legend_handles_labels()[0] + handles,
                 fontsize=7, loc="upper left", ncol=2)

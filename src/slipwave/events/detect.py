@@ -197,7 +197,8 @@ def detect_events(
     Raises
     ------
     SlipwaveError
-        If T or N is missing or has no finite value.
+        If T is missing or has no finite value (without N, the loads and
+        ratios that need it are NaN, with a warning).
 
     Examples
     --------
@@ -207,9 +208,8 @@ def detect_events(
     {'gross_slip': 12, 'partial_slip': 8}
     """
     source = recording.attrs.get("source", "the recording")
-    for channel in ("T", "N"):
-        if not _usable(recording, channel):
-            raise SlipwaveError(f"{source}: channel {channel} is missing or has no finite value")
+    if not _usable(recording, "T"):
+        raise SlipwaveError(f"{source}: channel T is missing or has no finite value")
     time = np.asarray(recording["time"].values, dtype=float)
     load = np.asarray(recording["T"].values, dtype=float)
     drops = load_drops(time, load, min_drop=min_drop, threshold=threshold,
@@ -228,7 +228,11 @@ def detect_events(
                         "not classified into partial and gross slips")
     events = classify_events(drops, {} if missing else jumps,
                              gross_edge_ratio=gross_edge_ratio)
-    normal = np.abs(np.asarray(recording["N"].values, dtype=float))
+    if _usable(recording, "N"):
+        normal = np.abs(np.asarray(recording["N"].values, dtype=float))
+    else:  # a force-only record: no normal load, so no T/|N| either
+        warnings.append("no usable N channel: T/|N| and the normal loading are unknown")
+        normal = np.full(time.size, np.nan)
     starts = events["i_start"].to_numpy(dtype=np.int64)
     ends = events["i_end"].to_numpy(dtype=np.int64)
     # levels over windows as long as the event (at least 5 samples), clear of it

@@ -7,10 +7,11 @@ import pandas as pd
 import xarray as xr
 from scipy import stats
 
-from slipwave.errors import SlipwaveError, warning_lines
+from slipwave.errors import warning_lines
 
-PHASES = ("normal_loading", "stick", "partial_slip", "gross_slip")
-"""Phase labels of :func:`segment_phases`, in the order of a test."""
+PHASES = ("normal_loading", "stick", "partial_slip", "gross_slip", "unclassified_slip")
+"""Phase labels of :func:`segment_phases` (``unclassified_slip``: a T drop whose kind is
+not known, without DG and DD)."""
 
 KINDS = ("partial_slip", "gross_slip")
 
@@ -72,10 +73,9 @@ def normal_loading_end(recording: xr.Dataset, *, plateau_fraction: float = 0.98)
     >>> normal_loading_end(ds)
     10
     """
+    if "N" not in recording or not np.isfinite(recording["N"].values).any():
+        return 0  # a force-only record: its normal loading is not known
     normal = np.abs(recording["N"].values.astype(float))
-    if not np.isfinite(normal).any():
-        raise SlipwaveError(f"{recording.attrs.get('source', 'the recording')}: "
-                            "N has no finite value")
     plateau = float(np.nanmedian(normal[normal.size // 2:]))
     reached = np.flatnonzero(normal >= plateau_fraction * plateau)
     return int(reached[0]) if reached.size else normal.size
@@ -86,10 +86,12 @@ def segment_phases(recording: xr.Dataset, events: pd.DataFrame) -> xr.DataArray:
 
     Samples before |N| reaches its plateau (:func:`normal_loading_end`) are
     ``normal_loading``; samples from an event's onset to its end take the
-    event's kind (gross wins where events overlap; unclassified events count
-    as partial slips); the rest is ``stick``. Phases are CF flags: one byte per
-    sample, the codes of :data:`PHASES` (a label per sample would take seven
-    times the memory of the signal); :func:`phase_labels` gives the labels.
+    event's kind (gross wins where events overlap; an unclassified event, a T
+    drop without DG and DD, is ``unclassified_slip``, never partial or gross);
+    the rest is ``stick``. Without N the normal loading is not known (none).
+    Phases are CF flags: one byte per sample, the codes of :data:`PHASES` (a
+    label per sample would take seven times the memory of the signal);
+    :func:`phase_labels` gives the labels.
 
     Parameters
     ----------
@@ -118,7 +120,7 @@ def segment_phases(recording: xr.Dataset, events: pd.DataFrame) -> xr.DataArray:
     code[: normal_loading_end(recording)] = PHASES.index("normal_loading")
     for kind in ("unclassified", "partial_slip", "gross_slip"):
         chosen = events[events["kind"] == kind]
-        value = PHASES.index("gross_slip" if kind == "gross_slip" else "partial_slip")
+        value = PHASES.index("unclassified_slip" if kind == "unclassified" else kind)
         for start, end in zip(chosen["i_start"], chosen["i_end"], strict=True):
             code[int(start) + 1 : int(end) + 1] = value
     phase = xr.DataArray(code, dims="time", name="phase",
@@ -258,7 +260,8 @@ def summary_row(test_id: str, dataset: xr.Dataset) -> dict[str, object]:
     """One campaign-summary row from :func:`events_dataset`'s Dataset.
 
     Friction ratios at gross slips (mean, std, confidence interval), wave
-    counts, time spent in each phase, warnings.
+    counts (T drops of unknown kind apart, as ``unclassified_waves``), time
+    spent in each phase, warnings.
 
     Parameters
     ----------
@@ -274,7 +277,8 @@ def summary_row(test_id: str, dataset: xr.Dataset) -> dict[str, object]:
 
     """
     row: dict[str, object] = {"test_id": test_id}
-    row.update({f"{k}_waves": v for k, v in wave_counts(dataset).items()})
+    counts = {"unclassified": 0, **wave_counts(dataset)}  # the same columns for every test
+    row.update({f"{k}_waves": counts[k] for k in (*KINDS, "unclassified")})
     for name in ("static", "dynamic"):
         for key in ("mean", "std", "ci_low", "ci_high"):
             row[f"{name}_ratio_{key}"] = float(dataset[f"{name}_{key}"])

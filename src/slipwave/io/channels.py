@@ -5,7 +5,7 @@ from __future__ import annotations
 CHANNELS: tuple[str, ...] = ("T", "N", "DG", "DD", "DT")
 """The recorded channels, in file order; ``time`` is the dimension."""
 
-REQUIRED_CHANNELS: tuple[str, ...] = ("T", "N")
+REQUIRED_CHANNELS: tuple[str, ...] = ("T",)
 
 CHANNEL_ATTRS: dict[str, dict[str, str]] = {
     "time": {"units": "s", "long_name": "time since the start of the acquisition", "axis": "T"},

@@ -667,7 +667,8 @@ def read_acquisition(
                 f"{lines[first]}"
             )
         data_vars[channel] = xr.Variable("time", values[channel], attrs)
-    _note_normal_sign(data_vars["N"])
+    if "N" in data_vars:
+        _note_normal_sign(data_vars["N"])
 
     missing = [c for c in CHANNELS if c not in values]
     global_attrs: dict[str, Any] = dict(head.metadata)
