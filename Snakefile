@@ -12,6 +12,7 @@ from slipwave.campaign import (
     check_campaign,
     check_config_files,
     column_pairs,
+    edge_convention,
     gross_edge_ratio,
     read_campaign,
 )

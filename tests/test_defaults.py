@@ -24,6 +24,7 @@ WORKFLOW_PARAMETERS = {
     ("detection", "max_duration"): (defaults.MAX_DURATION_S, "detect", "max_duration"),
     ("detection", "min_asymmetry"): (defaults.MIN_ASYMMETRY, "detect", "min_asymmetry"),
     ("detection", "gross_edge_ratio"): (defaults.GROSS_EDGE_RATIO, "detect", "gross_edge_ratio"),
+    ("detection", "edge_convention"): (defaults.EDGE_CONVENTION, "detect", "edge_convention"),
     ("video", "length_mm"): (defaults.CONTACT_LENGTH_MM, "kymograph", "length"),
     ("video", "band_mm"): (list(defaults.BAND_MM), "kymograph", "band"),
 }

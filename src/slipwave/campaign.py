@@ -12,7 +12,7 @@ import pandas as pd
 from slipwave.errors import ConfigError
 from slipwave.validation import check, read_yaml
 
-OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps")
+OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps", "edge_convention")
 """Columns a campaign table may leave out (their cells are then empty)."""
 
 
@@ -195,6 +195,29 @@ def gross_edge_ratio(config: Mapping[str, Any], test: Mapping[str, str] | pd.Ser
         raise ConfigError(f"test {test.get('test_id', '?')!r}: gross_edge_ratio {cell!r} must "
                           "be positive")
     return ratio
+
+
+def edge_convention(config: Mapping[str, Any], test: Mapping[str, str] | pd.Series) -> str:
+    """A test's edge-sensor convention: its table cell, else the config's.
+
+    Parameters
+    ----------
+    config
+        The validated workflow config (``detection.edge_convention`` filled in).
+    test
+        The test's row of the campaign table.
+
+    Returns
+    -------
+    str
+        ``auto``, ``x_axis`` or ``outward``.
+
+    Examples
+    --------
+    >>> edge_convention({"detection": {"edge_convention": "auto"}}, {"edge_convention": "outward"})
+    'outward'
+    """
+    return str(test.get("edge_convention") or config["detection"]["edge_convention"])
 
 
 def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,

@@ -72,6 +72,7 @@ def _detect(args: argparse.Namespace) -> None:
         recording, min_drop=args.min_drop, min_jump=args.min_jump, threshold=args.threshold,
         max_spike=args.max_spike, max_duration=args.max_duration,
         min_asymmetry=args.min_asymmetry, gross_edge_ratio=args.gross_edge_ratio,
+        edge_convention=args.edge_convention,
     )
     dataset = events_dataset(events, segment_phases(recording, events))
     dataset.attrs["test_id"] = args.test_id or str(recording.attrs.get("test_id", ""))
@@ -330,6 +331,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(%(default)s)")
     detect.add_argument("--gross-edge-ratio", type=float, default=default.GROSS_EDGE_RATIO,
                         help="DG jump / DD jump from which a drop is a gross slip (%(default)s)")
+    detect.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
+                        default=default.EDGE_CONVENTION,
+                        help="how the edge sensors read: both along +x, each its edge's outward "
+                        "displacement, or found from the data (%(default)s)")
     detect.set_defaults(run=_detect)
 
     summary = commands.add_parser(

@@ -42,6 +42,9 @@ MIN_ASYMMETRY = 3.0
 """How many times faster than the rise before it a drop must be."""
 GROSS_EDGE_RATIO = 0.9
 """DG jump / DD jump from which a T drop is a gross slip."""
+EDGE_CONVENTION = "auto"
+"""How the edge sensors read: ``x_axis`` (both along +x), ``outward`` (each its own edge's
+outward displacement, the paper's bench), or ``auto`` (found from the stick ramps)."""
 
 # Video analysis (slipwave.video; config section ``video``).
 BAND_MM = (0.5, 2.0)

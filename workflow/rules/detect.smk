@@ -18,6 +18,7 @@ rule detect:
         max_duration=config["detection"]["max_duration"],
         min_asymmetry=config["detection"]["min_asymmetry"],
         gross_edge_ratio=lambda wildcards: gross_edge_ratio(config, test_row(wildcards)),
+        edge_convention=lambda wildcards: edge_convention(config, test_row(wildcards)),
     conda:
         "../envs/slipwave.yaml"
     shell:
@@ -25,4 +26,5 @@ rule detect:
         "--test-id {wildcards.test_id:q} --threshold {params.threshold} "
         "--max-spike {params.max_spike} --max-duration {params.max_duration} "
         "--min-asymmetry {params.min_asymmetry} --gross-edge-ratio {params.gross_edge_ratio} "
+        "--edge-convention {params.edge_convention} "
         "> {log:q} 2>&1"

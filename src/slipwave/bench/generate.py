@@ -63,7 +63,9 @@ class BenchTest:
     from ``fs`` to ``fs_final`` over the first ``runin_slips`` gross slips
     (run-in) and a dynamic one ``fd``. Waves whose T drop is below
     ``min_event_drop`` (micro-slips at the edge of the contact) are listed in
-    the truth as not visible.
+    the truth as not visible. ``edge_convention`` is how the card's edge sensors
+    read: both along +x, or each its own edge's outward displacement (the
+    paper's bench: the left sensor's sign is turned).
     """
 
     test_id: str
@@ -88,6 +90,7 @@ class BenchTest:
     min_event_drop: float = 0.5
     sync_time: float = 2.0
     flavour: Literal["canonical", "vendor"] = "canonical"
+    edge_convention: Literal["x_axis", "outward"] = "x_axis"
     video: Literal["ffv1", "vp9", "png", "none"] = "vp9"
     camera: Camera = field(default_factory=Camera)
 
@@ -187,6 +190,8 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
                           duration=spec.duration, sample_rate=spec.sample_rate,
                           wave_speed=spec.wave_speed)
+    if spec.edge_convention == "outward":  # the left sensor reads its edge's outward motion
+        clean["DG"] = clean["DG"].copy(data=-clean["DG"].values)
     recording = apply_sensors(clean, DEFAULT_SENSORS, seed=seed)
     recording.attrs = {
         "test_id": spec.test_id,

@@ -15,10 +15,23 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from slipwave.defaults import GROSS_EDGE_RATIO, MAX_DURATION_S, MAX_SPIKE, MIN_ASYMMETRY, THRESHOLD
+from slipwave.defaults import (
+    EDGE_CONVENTION,
+    GROSS_EDGE_RATIO,
+    MAX_DURATION_S,
+    MAX_SPIKE,
+    MIN_ASYMMETRY,
+    THRESHOLD,
+)
 from slipwave.errors import SlipwaveError
-from slipwave.events.steps import edge_jumps, load_drops, window_median
-from slipwave.events.summary import friction_ratio, wave_counts
+from slipwave.events.steps import (
+    _fill_gaps,
+    edge_jumps,
+    load_drops,
+    noise_level,
+    window_median,
+)
+from slipwave.events.summary import friction_ratio, normal_loading_end, wave_counts
 
 EVENT_COLUMNS = (
     "kind", "i_start", "t_start", "i_end", "t_end", "duration", "T_before", "T_after",
@@ -155,8 +168,96 @@ def classify_events(
     return table
 
 
+EDGE_CONVENTIONS = ("x_axis", "outward")
+"""How edge sensors read: both along +x, or each its own edge's outward displacement."""
+
+
+def edge_convention(time: np.ndarray, load: np.ndarray, left: np.ndarray,
+                    drops: pd.DataFrame, *, start: int = 0, agreement: float = 0.8
+                    ) -> tuple[str | None, str]:
+    """How the left-edge sensor reads, from how it moves while the contact sticks.
+
+    While the flat drags the sticking contact to the right, T rises and the
+    slab's faces deflect towards +x: a sensor along +x reads the left edge
+    rising with T, an outward-reading one (the paper's bench) falling. Each
+    stick ramp between two drops (from ``start``, the end of the normal
+    loading) votes when T rose by more than 8 times its noise and DG moved by
+    more than 3 times its own.
+
+    Parameters
+    ----------
+    time
+        Sample times, s.
+    load
+        T.
+    left
+        DG, as recorded.
+    drops
+        From :func:`~slipwave.events.load_drops` (``i_start``, ``i_end``).
+    start
+        First sample of the tangential loading.
+    agreement
+        Share of the votes that decides.
+
+    Returns
+    -------
+    tuple
+        ``"x_axis"``, ``"outward"`` or ``None`` (the data cannot tell), and the
+        evidence in words.
+
+    Examples
+    --------
+    >>> t = np.arange(3000) * 0.01
+    >>> T = 2.0 * (t % 10.0)
+    >>> drops = pd.DataFrame({"i_start": [999, 1999], "i_end": [1000, 2000]})
+    >>> edge_convention(t, T, -0.01 * T, drops)[0]
+    'outward'
+    """
+    noise_t, noise_dg = noise_level(load), noise_level(left)
+    bounds = [start, *np.ravel(np.column_stack([drops["i_start"], drops["i_end"]])).tolist(),
+              load.size - 1]
+    up = down = 0
+    for first, last in zip(bounds[0::2], bounds[1::2], strict=False):
+        first, last = int(first), int(last)
+        if last - first < 10 or first < start:
+            continue
+        width = max(2, min(50, (last - first) // 5))
+        rise = window_median(load, last - width, last) - window_median(load, first, first + width)
+        moved = window_median(left, last - width, last) - window_median(left, first,
+                                                                        first + width)
+        if rise > 8 * noise_t and abs(moved) > 3 * noise_dg:
+            up, down = up + (moved > 0), down + (moved < 0)
+    votes = up + down
+    evidence = (f"DG rose with T over {up} and fell over {down} of the stick ramps where "
+                "both moved")
+    if votes and up >= agreement * votes:
+        return "x_axis", evidence
+    if votes and down >= agreement * votes:
+        return "outward", evidence
+    return None, evidence
+
+
 def _usable(recording: xr.Dataset, channel: str) -> bool:
     return channel in recording and bool(np.isfinite(recording[channel].values).any())
+
+
+def _convention(recording: xr.Dataset, time: np.ndarray, load: np.ndarray, drops: pd.DataFrame,
+                given: str, warnings: list[str]) -> tuple[str | None, str]:
+    """The edge convention to use and why (``None`` without a DG channel)."""
+    if given not in (*EDGE_CONVENTIONS, "auto"):
+        raise SlipwaveError(f"edge_convention {given!r}: auto, x_axis or outward")
+    if not _usable(recording, "DG"):
+        return None, "no DG channel"
+    if given != "auto":
+        return given, "given"
+    left = _fill_gaps(np.asarray(recording["DG"].values, dtype=float))
+    found, evidence = edge_convention(time, _fill_gaps(load), left, drops,
+                                      start=normal_loading_end(recording))
+    if found is None:
+        warnings.append(f"the edge sensors' convention cannot be told from the data ({evidence});"
+                        " x_axis assumed: set edge_convention (x_axis or outward) for this test")
+        return "x_axis", f"assumed: {evidence}"
+    return found, f"measured: {evidence}"
 
 
 def detect_events(
@@ -169,6 +270,7 @@ def detect_events(
     max_duration: float | None = MAX_DURATION_S,
     min_asymmetry: float = MIN_ASYMMETRY,
     gross_edge_ratio: float = GROSS_EDGE_RATIO,
+    edge_convention: str = EDGE_CONVENTION,
 ) -> pd.DataFrame:
     """Slip events of a recording: T drops, classified, with loads and edge jumps.
 
@@ -184,6 +286,12 @@ def detect_events(
         As in :func:`~slipwave.events.load_drops`.
     gross_edge_ratio
         As in :func:`classify_events`.
+    edge_convention
+        How the edge sensors read (:data:`EDGE_CONVENTIONS`), or ``"auto"``:
+        found from the stick ramps (:func:`edge_convention`; when the data
+        cannot tell, ``x_axis`` with a warning). An ``outward`` left sensor is
+        turned to +x before the edges are compared, so ``DG_jump`` and
+        ``edge_ratio`` are always along +x.
 
     Returns
     -------
@@ -216,12 +324,15 @@ def detect_events(
                        max_spike=max_spike, max_duration=max_duration,
                        min_asymmetry=min_asymmetry)
     warnings: list[str] = []
+    convention, evidence = _convention(recording, time, load, drops, edge_convention, warnings)
     jumps: dict[str, pd.DataFrame] = {}
     for channel in ("DG", "DD"):
         if _usable(recording, channel):
-            jumps[channel] = edge_jumps(time, np.asarray(recording[channel].values, dtype=float),
-                                        at=drops, min_jump=min_jump, threshold=threshold,
-                                        max_spike=max_spike)
+            values = np.asarray(recording[channel].values, dtype=float)
+            if channel == "DG" and convention == "outward":
+                values = -values  # along +x, as the rule compares them
+            jumps[channel] = edge_jumps(time, values, at=drops, min_jump=min_jump,
+                                        threshold=threshold, max_spike=max_spike)
     missing = [channel for channel in ("DG", "DD") if channel not in jumps]
     if missing:
         warnings.append(f"no usable {' or '.join(missing)} channel: events are T drops, "
@@ -266,6 +377,8 @@ def detect_events(
     result = result.astype({"i_start": np.int64, "i_end": np.int64})
     result.attrs.update(
         warnings="\n".join(warnings),
+        edge_convention=convention or "",
+        edge_convention_evidence=evidence,
         T_noise=drops.attrs.get("noise", np.nan),
         min_drop=drops.attrs.get("min_size", np.nan),
         sample_interval=drops.attrs.get("sample_interval", np.nan),
