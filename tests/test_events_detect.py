@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 import xarray as xr
 from scipy import stats
 
+from slipwave.bench.generate import BenchTest, simulate_test
 from slipwave.bench.sawtooth import SawtoothBench, sawtooth_events, sawtooth_recording
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
@@ -180,3 +182,38 @@ def test_command_line_detect_on_a_bad_file_fails_cleanly(tmp_path, capsys):
     assert main(["detect", str(bad), "-o", str(tmp_path / "e.csv")]) == 1
     assert "x.csv: channel T is missing or has no finite value" in capsys.readouterr().err
     assert not (tmp_path / "e.csv").exists()
+
+
+def test_edge_convention_found_given_or_warned(saw, tmp_path):
+    recording, _ = saw
+    found = detect_events(recording)
+    assert found.attrs["edge_convention"] == "x_axis"
+    assert found.attrs["edge_convention_evidence"].startswith("measured: DG rose with T over")
+    outward = recording.assign(DG=-recording["DG"])
+    twin = detect_events(outward)
+    assert twin.attrs["edge_convention"] == "outward"
+    assert twin["kind"].tolist() == found["kind"].tolist()
+    np.testing.assert_allclose(twin["DG_jump"], found["DG_jump"])  # always along +x
+    # told, it is not measured: an outward reading taken as +x classifies otherwise
+    told = detect_events(outward, edge_convention="x_axis")
+    assert told.attrs["edge_convention_evidence"] == "given"
+    assert told["kind"].tolist() != found["kind"].tolist()
+    # DG that does not follow T cannot tell: +x assumed, with a warning
+    rng = np.random.default_rng(0)
+    blind = recording.assign(DG=("time", rng.normal(0, 1e-4, recording.sizes["time"])))
+    assumed = detect_events(blind)
+    assert assumed.attrs["edge_convention"] == "x_axis"
+    assert "convention cannot be told from the data" in assumed.attrs["warnings"]
+    stored = events_dataset(twin, segment_phases(outward, twin))
+    write_dataset(stored, tmp_path / "events.nc")
+    assert read_dataset(tmp_path / "events.nc").attrs["edge_convention"] == "outward"
+
+
+def test_the_bench_writes_outward_edge_sensors():
+    spec = BenchTest("out", elements=40, duration=80.0, video="none", edge_convention="outward")
+    result = simulate_test(spec, seed=2)
+    events = detect_events(result.recording)
+    assert events.attrs["edge_convention"] == "outward"
+    twin = simulate_test(dataclasses.replace(spec, edge_convention="x_axis"), seed=2)
+    assert detect_events(twin.recording)["kind"].tolist() == events["kind"].tolist()
+    assert (events["kind"] == "gross_slip").sum() >= 1
