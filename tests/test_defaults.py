@@ -22,7 +22,7 @@ WORKFLOW_PARAMETERS = {
     ("detection", "threshold"): (defaults.THRESHOLD, "detect", "threshold"),
     ("detection", "max_spike"): (defaults.MAX_SPIKE, "detect", "max_spike"),
     ("detection", "max_duration"): (defaults.MAX_DURATION_S, "detect", "max_duration"),
-    ("detection", "min_asymmetry"): (defaults.MIN_ASYMMETRY, "detect", "min_asymmetry"),
+    ("detection", "min_fall_rate"): (defaults.MIN_FALL_RATE, "detect", "min_fall_rate"),
     ("detection", "gross_edge_ratio"): (defaults.GROSS_EDGE_RATIO, "detect", "gross_edge_ratio"),
     ("detection", "edge_convention"): (defaults.EDGE_CONVENTION, "detect", "edge_convention"),
     ("video", "length_mm"): (defaults.CONTACT_LENGTH_MM, "kymograph", "length"),

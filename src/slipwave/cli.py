@@ -71,7 +71,7 @@ def _detect(args: argparse.Namespace) -> None:
     events = detect_events(
         recording, min_drop=args.min_drop, min_jump=args.min_jump, threshold=args.threshold,
         max_spike=args.max_spike, max_duration=args.max_duration,
-        min_asymmetry=args.min_asymmetry, gross_edge_ratio=args.gross_edge_ratio,
+        min_fall_rate=args.min_fall_rate, gross_edge_ratio=args.gross_edge_ratio,
         edge_convention=args.edge_convention,
     )
     dataset = events_dataset(events, segment_phases(recording, events))
@@ -326,8 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="longest spike ignored, samples (%(default)s)")
     detect.add_argument("--max-duration", type=_optional_float, default=default.MAX_DURATION_S,
                         help="longest drop looked for, s ('none': a tenth of the recording)")
-    detect.add_argument("--min-asymmetry", type=float, default=default.MIN_ASYMMETRY,
-                        help="how much faster than the rise before it a drop must be "
+    detect.add_argument("--min-fall-rate", type=float, default=default.MIN_FALL_RATE,
+                        help="how many times faster than the drive loads T a drop must fall "
                         "(%(default)s)")
     detect.add_argument("--gross-edge-ratio", type=float, default=default.GROSS_EDGE_RATIO,
                         help="DG jump / DD jump from which a drop is a gross slip (%(default)s)")

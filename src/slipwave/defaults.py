@@ -39,7 +39,10 @@ MAX_SPIKE = 2
 MAX_DURATION_S: float | None = None
 """Longest drop looked for, s; ``None``: a tenth of the recording."""
 MIN_ASYMMETRY = 3.0
-"""How many times faster than the rise before it a drop must be."""
+"""How many times faster than the rise before it an edge step must be (edge_jumps)."""
+MIN_FALL_RATE = 1.2
+"""How many times faster than the drive's loading rate a load must fall to be a slip
+(the slider then moves at 2.2 times the drive's speed or more)."""
 GROSS_EDGE_RATIO = 0.9
 """DG jump / DD jump from which a T drop is a gross slip."""
 EDGE_CONVENTION = "auto"

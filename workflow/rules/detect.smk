@@ -16,7 +16,7 @@ rule detect:
         threshold=config["detection"]["threshold"],
         max_spike=config["detection"]["max_spike"],
         max_duration=config["detection"]["max_duration"],
-        min_asymmetry=config["detection"]["min_asymmetry"],
+        min_fall_rate=config["detection"]["min_fall_rate"],
         gross_edge_ratio=lambda wildcards: gross_edge_ratio(config, test_row(wildcards)),
         edge_convention=lambda wildcards: edge_convention(config, test_row(wildcards)),
     conda:
@@ -25,6 +25,6 @@ rule detect:
         "slipwave detect {input:q} -o {output.csv:q} --netcdf {output.netcdf:q} "
         "--test-id {wildcards.test_id:q} --threshold {params.threshold} "
         "--max-spike {params.max_spike} --max-duration {params.max_duration} "
-        "--min-asymmetry {params.min_asymmetry} --gross-edge-ratio {params.gross_edge_ratio} "
+        "--min-fall-rate {params.min_fall_rate} --gross-edge-ratio {params.gross_edge_ratio} "
         "--edge-convention {params.edge_convention} "
         "> {log:q} 2>&1"

@@ -20,7 +20,7 @@ from slipwave.defaults import (
     GROSS_EDGE_RATIO,
     MAX_DURATION_S,
     MAX_SPIKE,
-    MIN_ASYMMETRY,
+    MIN_FALL_RATE,
     THRESHOLD,
 )
 from slipwave.errors import SlipwaveError
@@ -268,7 +268,7 @@ def detect_events(
     threshold: float = THRESHOLD,
     max_spike: int = MAX_SPIKE,
     max_duration: float | None = MAX_DURATION_S,
-    min_asymmetry: float = MIN_ASYMMETRY,
+    min_fall_rate: float = MIN_FALL_RATE,
     gross_edge_ratio: float = GROSS_EDGE_RATIO,
     edge_convention: str = EDGE_CONVENTION,
 ) -> pd.DataFrame:
@@ -282,7 +282,7 @@ def detect_events(
     min_drop, min_jump
         Smallest T drop (N) and edge jump (mm); ``None``: ``threshold`` times
         each channel's noise level.
-    threshold, max_spike, max_duration, min_asymmetry
+    threshold, max_spike, max_duration, min_fall_rate
         As in :func:`~slipwave.events.load_drops`.
     gross_edge_ratio
         As in :func:`classify_events`.
@@ -322,7 +322,7 @@ def detect_events(
     load = np.asarray(recording["T"].values, dtype=float)
     drops = load_drops(time, load, min_drop=min_drop, threshold=threshold,
                        max_spike=max_spike, max_duration=max_duration,
-                       min_asymmetry=min_asymmetry)
+                       min_fall_rate=min_fall_rate)
     warnings: list[str] = []
     convention, evidence = _convention(recording, time, load, drops, edge_convention, warnings)
     jumps: dict[str, pd.DataFrame] = {}

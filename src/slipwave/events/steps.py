@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from slipwave.defaults import MAX_DURATION_S, MAX_SPIKE, MIN_ASYMMETRY, THRESHOLD
+from slipwave.defaults import MAX_DURATION_S, MAX_SPIKE, MIN_ASYMMETRY, MIN_FALL_RATE, THRESHOLD
 from slipwave.errors import SlipwaveError
 
 STEP_COLUMNS = ("i_start", "t_start", "i_end", "t_end", "peak", "trough", "drop", "duration")
@@ -129,7 +129,8 @@ def fall_candidates(
     *,
     block: int,
     max_duration: int,
-    min_asymmetry: float = MIN_ASYMMETRY,
+    min_asymmetry: float | None = None,
+    min_fall_rate: float | None = None,
 ) -> np.ndarray:
     """Coarse falls of a despiked signal: (peak sample, trough sample) pairs.
 
@@ -147,10 +148,16 @@ def fall_candidates(
     max_duration
         The longest fall looked for, in samples: it sets the pyramid's depth.
     min_asymmetry
-        A fall is kept only if it is at least this many times faster than the
-        rise before it (from the previous swing low, a low the signal had
-        risen from by more than ``threshold``): saw-tooth drops pass, the
-        descending half of an oscillation does not.
+        For steps: a fall is kept if it is at least this many times faster
+        (in rate or in time) than the rise before it (from the previous swing
+        low, a low the signal had risen from by more than ``threshold``).
+    min_fall_rate
+        For slips (takes precedence): a fall is kept if it is at least this
+        many times faster than the drive's loading rate, the median rate of
+        the rises before every candidate fall (from its swing low). What tells
+        a slip is how fast the load falls against how fast the drive loads,
+        not how long the stick before it lasted: the descending half of an
+        oscillation falls as fast as it rose, and is not kept.
 
     Returns
     -------
@@ -158,6 +165,14 @@ def fall_candidates(
         Shape (k, 2): the sample indices of the top and bottom of each fall,
         sorted, not overlapping.
     """
+    return _fall_pairs(smooth, threshold, block=block, max_duration=max_duration,
+                       min_asymmetry=min_asymmetry, min_fall_rate=min_fall_rate)[0]
+
+
+def _fall_pairs(smooth: np.ndarray, threshold: float, *, block: int, max_duration: int,
+                min_asymmetry: float | None, min_fall_rate: float | None
+                ) -> tuple[np.ndarray, float]:
+    """:func:`fall_candidates`, and the drive's loading rate per sample (0 if unknown)."""
     levels: list[tuple[int, int]] = []
     seen = np.zeros(smooth.size, dtype=bool)
     level = smooth
@@ -189,6 +204,10 @@ def fall_candidates(
     # without rebounding on the way) and is dropped where it spans several falls
     falls: dict[int, tuple[int, int]] = {}
     owner = np.full(smooth.size, -1)  # which kept fall covers each value
+    rates = {pair: _rates(smooth, *pair, threshold) for pair in dict.fromkeys(levels)}
+    rises = np.array([rise for _, rise in rates.values()])
+    rises = rises[np.isfinite(rises) & (rises > 0)]
+    loading = float(np.median(rises)) if rises.size else 0.0  # the drive's, per block
     for label, (top, bottom) in enumerate(dict.fromkeys(levels)):
         inside = [falls[k] for k in set(owner[top : bottom + 1].tolist()) - {-1}]
         if inside:
@@ -197,7 +216,15 @@ def fall_candidates(
             further = smooth[top] - smooth[bottom] - max(smooth[a] - smooth[b] for a, b in inside)
             if rebound > threshold or further <= threshold:
                 continue
-        if _asymmetry(smooth, top, bottom, threshold) >= min_asymmetry:
+        fall_rate, rise_rate = rates[(top, bottom)]
+        if min_fall_rate is not None:  # a slip: much faster than the drive loads
+            # blocks blur a fall shorter than a few of them: a first screen at a quarter of the
+            # rate here, the exact rate on the samples once the fall is refined (_falls)
+            fast = (loading > 0 and rise_rate != 0.0
+                    and fall_rate >= 0.25 * min_fall_rate * loading)
+        else:  # a step: faster than the rise before it
+            fast = _asymmetry(smooth, top, bottom, threshold) >= (min_asymmetry or 0.0)
+        if fast:
             for a, b in inside:
                 owner[a : b + 1] = -1
             falls = {k: pair for k, pair in falls.items() if pair not in inside}
@@ -214,7 +241,7 @@ def fall_candidates(
         else:
             merged.append((top, bottom))
     pairs = np.array(merged, dtype=np.int64).reshape(-1, 2) * block + block // 2
-    return pairs
+    return pairs, loading / block
 
 
 def _turn(values: np.ndarray, swing: float) -> int:
@@ -248,6 +275,29 @@ def _whole_fall(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tupl
             break
         reach *= 4
     return top - back, bottom + on
+
+
+def _rates(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tuple[float, float]:
+    """(fall rate, rate of the rise before it) of the fall from ``top`` to ``bottom``, per block.
+
+    The rise starts at the previous swing low (going back from ``top`` while
+    the signal keeps within ``swing`` of its lowest value so far), or at the
+    lowest value since the signal's start. Its rate is 0 where there is no
+    real rise: the fall continues an earlier one.
+    """
+    span = max(bottom - top, 1)
+    fall_rate = (smooth[top] - smooth[bottom]) / span
+    reach = 4 * span
+    while True:
+        start = max(0, top - reach)
+        backwards = smooth[start : top + 1][::-1]
+        lowest = np.minimum.accumulate(backwards)
+        turned = np.flatnonzero(backwards > lowest + swing)
+        if turned.size or start == 0:  # back to the swing low, or to the signal's start
+            low = int(np.argmin(backwards[: turned[0]] if turned.size else backwards))
+            rise = backwards[0] - backwards[low]
+            return float(fall_rate), float(rise / max(low, 1)) if rise > swing else 0.0
+        reach *= 4
 
 
 def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float:
@@ -427,14 +477,15 @@ def _falls(
     size: float,
     max_spike: int,
     longest: int,
-    min_asymmetry: float,
+    min_asymmetry: float | None = None,
+    min_fall_rate: float | None = None,
 ) -> list[tuple[int, int, float, float]]:
     """(onset, end, peak, trough) of each fall of ``values`` larger than ``size``."""
     block = 2 * max_spike + 1
     if size <= 0.0 or smooth.size < 2 * _LAG or np.ptp(smooth) < 0.5 * size:
         return []
-    pairs = fall_candidates(smooth, 0.5 * size, block=block, max_duration=longest,
-                            min_asymmetry=min_asymmetry)
+    pairs, loading = _fall_pairs(smooth, 0.5 * size, block=block, max_duration=longest,
+                                 min_asymmetry=min_asymmetry, min_fall_rate=min_fall_rate)
     falls = []
     previous_end = 0
     for k, (top, bottom) in enumerate(pairs):
@@ -442,7 +493,9 @@ def _falls(
         onset, end, peak, trough = refine_step(values, int(top), int(bottom),
                                                low=previous_end, high=following,
                                                max_spike=max_spike)
-        if peak - trough >= size and end > onset:
+        fast = min_fall_rate is None or (
+            end > onset and (peak - trough) / (end - onset) >= min_fall_rate * loading)
+        if peak - trough >= size and end > onset and fast:
             falls.append((onset, end, peak, trough))
             previous_end = end
     return falls
@@ -477,7 +530,7 @@ def load_drops(
     threshold: float = THRESHOLD,
     max_spike: int = MAX_SPIKE,
     max_duration: float | None = MAX_DURATION_S,
-    min_asymmetry: float = MIN_ASYMMETRY,
+    min_fall_rate: float = MIN_FALL_RATE,
 ) -> pd.DataFrame:
     """Drops of a load-like signal: one row per fast decrease.
 
@@ -498,9 +551,12 @@ def load_drops(
         are spikes, not drops, whatever their height.
     max_duration
         Longest drop looked for (s); ``None``: a tenth of the recording.
-    min_asymmetry
-        A drop must be at least this many times faster than the rise that
-        preceded it (an oscillation's descending half is not a drop).
+    min_fall_rate
+        A drop must fall at least this many times faster than the drive loads
+        the signal (the median rate of the rises before the candidate drops):
+        the slider then moves at ``1 + min_fall_rate`` times the drive's speed
+        or more. A slow oscillation (falling as fast as it rose) or a drift
+        is no drop; a slip after a short stick, or after creep, is.
 
     Returns
     -------
@@ -535,7 +591,7 @@ def load_drops(
     size = threshold * sigma if min_drop is None else float(min_drop)
     falls = _falls(values, despike(values, max_spike), size=size, max_spike=max_spike,
                    longest=_longest(values, max_duration, interval),
-                   min_asymmetry=min_asymmetry)
+                   min_fall_rate=min_fall_rate)
     return _step_table(time, falls, noise=sigma, min_size=size, sample_interval=interval)
 
 
