@@ -277,41 +277,14 @@ def _whole_fall(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tupl
     return top - back, bottom + on
 
 
-def _rates(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tuple[float, float]:
-    """(fall rate, rate of the rise before it) of the fall from ``top`` to ``bottom``, per block.
+def _rise_before(smooth: np.ndarray, top: int, span: int, swing: float
+                 ) -> tuple[float, int, bool]:
+    """The rise that ends at ``top``: its height, length (blocks) and whether a swing low starts it.
 
-    The rise starts at the previous swing low (going back from ``top`` while
-    the signal keeps within ``swing`` of its lowest value so far), or at the
-    lowest value since the signal's start. Its rate is 0 where there is no
-    real rise: the fall continues an earlier one.
+    The rise starts at the previous swing low: going back from ``top`` while the
+    signal keeps within ``swing`` of its lowest value so far (or back to the start
+    of the signal); ``span`` sets how far to look first.
     """
-    span = max(bottom - top, 1)
-    fall_rate = (smooth[top] - smooth[bottom]) / span
-    reach = 4 * span
-    while True:
-        start = max(0, top - reach)
-        backwards = smooth[start : top + 1][::-1]
-        lowest = np.minimum.accumulate(backwards)
-        turned = np.flatnonzero(backwards > lowest + swing)
-        if turned.size or start == 0:  # back to the swing low, or to the signal's start
-            low = int(np.argmin(backwards[: turned[0]] if turned.size else backwards))
-            rise = backwards[0] - backwards[low]
-            return float(fall_rate), float(rise / max(low, 1)) if rise > swing else 0.0
-        reach *= 4
-
-
-def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float:
-    """How many times faster the fall from ``top`` to ``bottom`` is than the rise before it.
-
-    Faster in rate or in duration, whichever is larger: a small drop after a
-    long ramp and a large drop after a short rise are both saw-tooth drops.
-
-    The rise starts at the previous swing low: going back from ``top`` while
-    the signal keeps within ``swing`` of its lowest value so far (or back to
-    the start of the signal).
-    """
-    span = max(bottom - top, 1)
-    fall_rate = (smooth[top] - smooth[bottom]) / span
     reach = 4 * span
     while True:
         start = max(0, top - reach)
@@ -320,14 +293,39 @@ def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float
         turned = np.flatnonzero(backwards > lowest + swing)
         if turned.size or start == 0:
             low = int(np.argmin(backwards[: turned[0]] if turned.size else backwards))
-            if not turned.size:  # no swing low since the start: only the time is known
-                return low / span
-            rise = backwards[0] - backwards[low]
-            if rise <= swing:  # no real rise before: the middle of a longer fall
-                return 0.0
-            # faster: steeper than the rise, or over in a fraction of its time
-            return float(max(fall_rate * low / rise, low / span))
+            return float(backwards[0] - backwards[low]), low, bool(turned.size)
         reach *= 4
+
+
+def _rates(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tuple[float, float]:
+    """(fall rate, rate of the rise before it) of the fall from ``top`` to ``bottom``, per block.
+
+    The rise is :func:`_rise_before`'s (from the signal's start if no swing low
+    comes before). Its rate is 0 where there is no real rise: the fall continues
+    an earlier one.
+    """
+    span = max(bottom - top, 1)
+    rise, length, _ = _rise_before(smooth, top, span, swing)
+    fall_rate = float((smooth[top] - smooth[bottom]) / span)
+    return fall_rate, rise / max(length, 1) if rise > swing else 0.0
+
+
+def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float:
+    """How many times faster the fall from ``top`` to ``bottom`` is than the rise before it.
+
+    Faster in rate or in duration, whichever is larger: a small drop after a
+    long ramp and a large drop after a short rise are both saw-tooth drops (the
+    rise: :func:`_rise_before`).
+    """
+    span = max(bottom - top, 1)
+    fall_rate = (smooth[top] - smooth[bottom]) / span
+    rise, length, at_swing_low = _rise_before(smooth, top, span, swing)
+    if not at_swing_low:  # no swing low since the start: only the time is known
+        return length / span
+    if rise <= swing:  # no real rise before: the middle of a longer fall
+        return 0.0
+    # faster: steeper than the rise, or over in a fraction of its time
+    return float(max(fall_rate * length / rise, length / span))
 
 
 def _hinge(values: np.ndarray, candidates: np.ndarray) -> tuple[int, np.ndarray]:
