@@ -73,7 +73,8 @@ def event_summary(events: xr.Dataset) -> dict[str, Any]:
     -------
     dict
         ``counts``, ``ratios`` (static and dynamic: mean, std, interval),
-        ``warnings``, ``columns`` and ``rows`` of the events table.
+        ``warnings``, ``columns`` and ``rows`` of the events table, and how the
+        edge sensors read (``edge_convention``, ``edge_evidence``).
 
     """
     table = events_table(events)
@@ -88,6 +89,9 @@ def event_summary(events: xr.Dataset) -> dict[str, Any]:
         "warnings": warning_lines(events.attrs),
         "columns": list(EVENT_COLUMNS),
         "rows": table.to_dict("records"),
+        "edge_convention": {"x_axis": "both along +x", "outward": "each its edge's outward "
+                            "displacement"}.get(str(events.attrs.get("edge_convention", "")), ""),
+        "edge_evidence": str(events.attrs.get("edge_convention_evidence", "")),
     }
 
 
