@@ -11,6 +11,7 @@ from slipwave.solver.zones import (
     track_zones,
     zone_events,
     zone_runs,
+    zone_sweeps,
 )
 
 
@@ -64,3 +65,18 @@ def test_the_right_edge_unloads_outward_before_the_drag_slips_it():
     opening = appear[appear["condition"] == "open"]["step"].min()
     dragged = appear[appear["condition"] == "slip_back"]["step"].min()
     assert first["step"] < opening < dragged
+
+
+def test_sweeps_say_where_a_zone_went():
+    codes = np.array([
+        [1] * 10,
+        [1] * 4 + [2] * 2 + [1] * 4,  # slip appears inside
+        [1] * 2 + [2] * 6 + [1] * 2,  # and grows both ways
+        [1] * 8 + [0] * 2,            # then sticks again; the right edge opens
+    ])
+    sweeps = zone_sweeps(track_zones(codes, np.arange(10.0), min_size=1.5), min_size=1.5)
+    slip = sweeps[sweeps["condition"] == "slip_back"].iloc[0]
+    assert (slip["first_step"], slip["last_step"], slip["sweep"]) == (1, 2, "both_ways")
+    assert (slip["x_min"], slip["x_max"], slip["swept"]) == (2.0, 7.0, 4.0)
+    opened = sweeps[sweeps["condition"] == "open"].iloc[0]
+    assert (opened["first_step"], opened["sweep"]) == (3, "none")

@@ -241,3 +241,46 @@ def _event(step: int, event: str, zone: pd.Series, where: str) -> dict[str, obje
     return {"step": step, "event": event, "zone": int(cast(int, zone["zone"])),
             "condition": zone["condition"], "where": where, "x_left": float(zone["x_left"]),
             "x_right": float(zone["x_right"])}
+
+
+def zone_sweeps(zones: pd.DataFrame, *, min_size: float) -> pd.DataFrame:
+    """How each zone grew over its life: where it started, which way it swept, how far.
+
+    Parameters
+    ----------
+    zones
+        From :func:`track_zones`.
+    min_size
+        Growth at one end smaller than this (mm) is no growth.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per zone: ``zone``, ``condition``, ``first_step``, ``last_step``,
+        ``x_left``, ``x_right`` (where it appeared), ``x_min``, ``x_max`` (the
+        range it covered), ``sweep`` (``right_to_left``, ``left_to_right``,
+        ``both_ways`` or ``none``) and ``swept`` (mm its ends travelled).
+
+    Examples
+    --------
+    >>> codes = np.array([[1] * 8, [1] * 6 + [2] * 2, [1] * 2 + [2] * 6])
+    >>> sweeps = zone_sweeps(track_zones(codes, np.arange(8.0), min_size=1.5), min_size=1.5)
+    >>> sweeps[sweeps["condition"] == "slip_back"][["sweep", "swept"]].values.tolist()
+    [['right_to_left', 4.0]]
+    """
+    rows = []
+    for zone, life in zones.groupby("zone", sort=True):
+        life = life.sort_values("step")
+        first = life.iloc[0]
+        leftward = float(first["x_left"] - life["x_left"].min())
+        rightward = float(life["x_right"].max() - first["x_right"])
+        grew_left, grew_right = leftward >= min_size, rightward >= min_size
+        sweep = ("both_ways" if grew_left and grew_right else "right_to_left" if grew_left
+                 else "left_to_right" if grew_right else "none")
+        rows.append({"zone": int(cast(int, zone)), "condition": first["condition"],
+                     "first_step": int(first["step"]), "last_step": int(life["step"].max()),
+                     "x_left": float(first["x_left"]), "x_right": float(first["x_right"]),
+                     "x_min": float(life["x_left"].min()), "x_max": float(life["x_right"].max()),
+                     "sweep": sweep, "swept": round(leftward + rightward, 6)})
+    return pd.DataFrame(rows, columns=["zone", "condition", "first_step", "last_step", "x_left",
+                                       "x_right", "x_min", "x_max", "sweep", "swept"])
