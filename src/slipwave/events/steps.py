@@ -204,10 +204,13 @@ def _fall_pairs(smooth: np.ndarray, threshold: float, *, block: int, max_duratio
     # without rebounding on the way) and is dropped where it spans several falls
     falls: dict[int, tuple[int, int]] = {}
     owner = np.full(smooth.size, -1)  # which kept fall covers each value
-    rates = {pair: _rates(smooth, *pair, threshold) for pair in dict.fromkeys(levels)}
-    rises = np.array([rise for _, rise in rates.values()])
-    rises = rises[np.isfinite(rises) & (rises > 0)]
-    loading = float(np.median(rises)) if rises.size else 0.0  # the drive's, per block
+    loading = 0.0  # the drive's loading rate, per block (the slip rule only)
+    rates: dict[tuple[int, int], tuple[float, float]] = {}
+    if min_fall_rate is not None:
+        rates = {pair: _rates(smooth, *pair, threshold) for pair in dict.fromkeys(levels)}
+        rises = np.array([rise for _, rise in rates.values()])
+        rises = rises[np.isfinite(rises) & (rises > 0)]
+        loading = float(np.median(rises)) if rises.size else 0.0
     for label, (top, bottom) in enumerate(dict.fromkeys(levels)):
         inside = [falls[k] for k in set(owner[top : bottom + 1].tolist()) - {-1}]
         if inside:
@@ -216,8 +219,8 @@ def _fall_pairs(smooth: np.ndarray, threshold: float, *, block: int, max_duratio
             further = smooth[top] - smooth[bottom] - max(smooth[a] - smooth[b] for a, b in inside)
             if rebound > threshold or further <= threshold:
                 continue
-        fall_rate, rise_rate = rates[(top, bottom)]
         if min_fall_rate is not None:  # a slip: much faster than the drive loads
+            fall_rate, rise_rate = rates[(top, bottom)]
             # blocks blur a fall shorter than a few of them: a first screen at a quarter of the
             # rate here, the exact rate on the samples once the fall is refined (_falls)
             fast = (loading > 0 and rise_rate != 0.0

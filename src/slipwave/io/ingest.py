@@ -358,12 +358,20 @@ def _line_starts(raw: bytes, offset: int) -> np.ndarray:
     return np.concatenate([[0], np.flatnonzero(lf | lone_cr) + 1]) + offset
 
 
-def _blocks(stream: BinaryIO, start: int) -> Iterator[tuple[bytes, bool]]:
-    """Blocks of whole lines from ``start`` (the last may lack its line end), and if last."""
-    stream.seek(start)
+def _blocks(stream: BinaryIO, start: int, digest: Any = None) -> Iterator[tuple[bytes, bool]]:
+    """Blocks of whole lines from ``start`` (the last may lack its line end), and if last.
+
+    With ``digest`` (a hashlib object), every byte of the stream is fed to it on the
+    way, the head before ``start`` included: the file is read once.
+    """
+    stream.seek(0 if digest is not None else start)
+    if digest is not None:
+        digest.update(stream.read(start))
     carry = b""
     while True:
         block = stream.read(_CHUNK_BYTES)
+        if digest is not None:
+            digest.update(block)
         if not block:
             if carry:
                 yield carry, True
@@ -513,7 +521,7 @@ def _data_columns(path: Path, head: _Head, prefix: bytes) -> int:
 
 
 def _read_data(path: Path, stream: BinaryIO, head: _Head, ncols: int, found: Mapping[str, int],
-               size: int) -> tuple[dict[str, np.ndarray], _LineNumbers]:
+               size: int, digest: Any = None) -> tuple[dict[str, np.ndarray], _LineNumbers]:
     """The channels' values (in N, mm, s) and the line of each row, block by block.
 
     A last line without its line end was cut while the card wrote it, whatever it
@@ -524,7 +532,7 @@ def _read_data(path: Path, stream: BinaryIO, head: _Head, ncols: int, found: Map
     row = 0  # data lines read so far
     blanks = 0
     infinities: dict[str, int] = {}
-    for block, final in _blocks(stream, head.data_offset):
+    for block, final in _blocks(stream, head.data_offset, digest):
         first_line = head.data_line + row
         frame = _tokenize(path, block, head, ncols, first_line)
         lines_in_block = len(frame)
@@ -643,10 +651,13 @@ def read_acquisition(
                            else prefix[: prefix.rfind(b"\n") + 1])
         found = _map_columns(path, head, columns)
         ncols = _data_columns(path, head, prefix)
-        values, lines = _read_data(path, stream, head, ncols, found, size)
-        handle.seek(0)
-        for block in iter(lambda: handle.read(_CHUNK_BYTES), b""):
-            digest.update(block)
+        # the hash is of the file's own bytes: fed while reading, or (for UTF-16, which
+        # was converted whole) read again
+        values, lines = _read_data(path, stream, head, ncols, found, size,
+                                   digest if stream is handle else None)
+        if stream is not handle:
+            handle.seek(0)
+            digest.update(handle.read())
     if len(lines) == 0:
         raise AcquisitionError(path, "no data rows after the header", line=head.header_line)
     time = _time_axis(path, head, values, lines)
