@@ -14,6 +14,7 @@ from slipwave.campaign import (
     column_pairs,
     edge_convention,
     gross_edge_ratio,
+    height_ratio_pairs,
     read_campaign,
 )
 
@@ -39,10 +40,12 @@ with open(f"{workflow.basedir}/workflow/schemas/tests.schema.json") as schema:
 
 TEST_IDS = list(campaign["test_id"])
 FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
+MAP_HEIGHT_RATIOS = [f"{ratio:g}" for ratio in config["map"]["height_ratios"]]
 
 
 wildcard_constraints:
     test_id="|".join(TEST_IDS) or "no-tests",
+    height_ratio="|".join(MAP_HEIGHT_RATIOS).replace(".", r"\."),
 
 
 include: "workflow/rules/common.smk"
@@ -52,6 +55,7 @@ include: "workflow/rules/summary.smk"
 include: "workflow/rules/kymograph.smk"
 include: "workflow/rules/waves.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/map.smk"
 
 
 rule all:
@@ -61,4 +65,5 @@ rule all:
         expand("results/{test_id}/waves.csv", test_id=FILMED_IDS),
         expand("reports/{test_id}.html", test_id=TEST_IDS),
         "results/summary.csv",
+        "results/map/map.nc",
     default_target: True

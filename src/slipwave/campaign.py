@@ -12,7 +12,8 @@ import pandas as pd
 from slipwave.errors import ConfigError
 from slipwave.validation import check, read_yaml
 
-OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps", "edge_convention")
+OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps", "edge_convention",
+                    "height_ratio")
 """Columns a campaign table may leave out (their cells are then empty)."""
 
 
@@ -294,3 +295,27 @@ def check_config_files(paths: Iterable[str | PathLike[str]],
     names = ", ".join(map(str, given))
     raise ConfigError(f"{names}: no 'tests' entry naming the campaign table; without it the "
                       "default campaign (config/config.yaml) would run instead")
+
+
+def height_ratio_pairs(campaign: pd.DataFrame) -> list[str]:
+    """``TEST=H/L`` for each test with a ``height_ratio`` (for ``slipwave map assemble``).
+
+    Parameters
+    ----------
+    campaign
+        From :func:`read_campaign`.
+
+    Returns
+    -------
+    list of str
+        One pair per test that has an H/L, in table order.
+
+    Examples
+    --------
+    >>> table = pd.DataFrame({"test_id": ["a", "b"], "height_ratio": ["0.5", ""]})
+    >>> height_ratio_pairs(table)
+    ['a=0.5']
+    """
+    return [f"{test}={ratio}" for test, ratio in zip(campaign["test_id"],
+                                                     campaign["height_ratio"], strict=True)
+            if str(ratio)]

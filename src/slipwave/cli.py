@@ -175,13 +175,15 @@ def _simulate(args: argparse.Namespace) -> None:
                 elements=args.elements, holder=args.holder)
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
                     normal_control=args.normal_control, max_travel=args.max_travel,
-                    travel_step=args.travel_step, machine_stiffness=args.machine_stiffness)
+                    travel_step=args.travel_step, machine_stiffness=args.machine_stiffness,
+                    normal_friction=args.normal_friction == "on")
     require_memory(condensation_memory(slab), f"simulating a slab of {args.elements} elements "
                    f"and H = {args.height:g} mm", limit_gb=args.memory_limit)
     result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path,
                       condensed=condense(slab, store=DiskCache()))
     behaviour = describe_behaviour(result)
-    result.attrs["behaviour"] = behaviour.label
+    result.attrs["behaviour"] = behaviour.text
+    result.attrs["behaviour_events"] = behaviour.to_json()
     write_dataset(result, args.output)
     if args.plot:
         from slipwave.plot import plot_zones
@@ -189,7 +191,69 @@ def _simulate(args: argparse.Namespace) -> None:
         plot_zones(result).savefig(args.plot, dpi=120)
     ratio = "not reached" if behaviour.ratio_at_gross is None else f"{behaviour.ratio_at_gross:.4f}"
     print(f"{args.output}: {result.sizes['step']} steps, T/N at gross sliding {ratio}, "
-          f"behaviour {behaviour.label}")
+          f"behaviour: {behaviour.text}")
+
+
+def _map_row(args: argparse.Namespace) -> None:
+    from tqdm import tqdm
+
+    from slipwave.cache import DiskCache
+    from slipwave.io import write_dataset
+    from slipwave.map import friction_grid, map_row
+    from slipwave.solver import LoadPath
+
+    frictions = friction_grid(*args.frictions)
+    path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
+                    normal_control=args.normal_control,
+                    normal_friction=args.normal_friction == "on")
+    with tqdm(total=frictions.size, desc=f"H/L {args.height_ratio:g}", unit="case",
+              mininterval=2.0, file=sys.stderr) as bar:
+        row = map_row(args.height_ratio, frictions, elements=args.elements, path=path,
+                      min_size=args.min_zone, store=DiskCache(),
+                      progress=lambda done, total: bar.update(1))
+    write_dataset(row, args.output)
+    seconds = row["seconds"].values
+    print(f"H/L {args.height_ratio:g}: {frictions.size} cases in {seconds.sum():.1f} s "
+          f"(mean {1000 * seconds.mean():.1f} ms, condensation {row.attrs['condensation_s']} s), "
+          f"largest residual {float(row['max_residual'].max()):.2g} -> {args.output}")
+
+
+def _map_assemble(args: argparse.Namespace) -> None:
+    import pandas as pd
+
+    from slipwave.cache import DiskCache
+    from slipwave.io import atomic_output, read_dataset, write_dataset
+    from slipwave.map import (
+        assemble_map,
+        behaviour_legend,
+        map_table,
+        place_tests,
+        representative_cases,
+        simulate_case,
+    )
+    from slipwave.plot import plot_map, plot_zone_histories
+
+    whole = assemble_map([read_dataset(path) for path in args.rows])
+    tests = None
+    if args.summary is not None:
+        tests = place_tests(pd.read_csv(args.summary), dict(args.test_ratio))
+    write_dataset(whole, args.output)
+    with atomic_output(args.csv) as temporary:
+        map_table(whole).to_csv(temporary, index=False, float_format="%.6g")
+    with atomic_output(args.legend) as temporary:
+        temporary.write_text(behaviour_legend(whole) + "\n")
+    with atomic_output(args.figure) as temporary:
+        plot_map(whole, tests).savefig(temporary, dpi=130, format="png")
+    if args.zones is not None:
+        cases = [(f"{case.name}: H/L {case.height_ratio:g}, f {case.friction:.2f}",
+                  simulate_case(whole, case.height_ratio, case.friction, store=DiskCache()))
+                 for case in representative_cases(whole).itertuples()]
+        with atomic_output(args.zones) as temporary:
+            plot_zone_histories(cases).savefig(temporary, dpi=130, format="png")
+    failed = int((whole["end"].values == "").sum())
+    print(f"{whole['behaviour'].size} cases, {whole.sizes['behaviour_id']} behaviours, "
+          f"{failed} failed, largest residual {float(whole['max_residual'].max()):.2g}, "
+          f"mean {1000 * float(whole['seconds'].mean()):.1f} ms per case -> {args.output}")
 
 
 def _bench(args: argparse.Namespace) -> None:
@@ -277,6 +341,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="T step, newtons (%(default)s)")
     sim.add_argument("--normal-control", choices=["displacement", "force"],
                      default="displacement", help="what is held after the normal loading")
+    sim.add_argument("--normal-friction", choices=["on", "off"], default="on",
+                     help="friction during the normal loading (%(default)s)")
     sim.add_argument("--max-travel", type=float, default=None,
                      help="go on past gross sliding up to this flat travel, mm")
     sim.add_argument("--travel-step", type=float, default=None,
@@ -290,6 +356,49 @@ def build_parser() -> argparse.ArgumentParser:
                      help="refuse a run whose estimated memory exceeds this (default: "
                      "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     sim.set_defaults(run=_simulate)
+
+    mapping = commands.add_parser(
+        "map", help="the behaviour map over f x H/L (the paper's figure 2)",
+        description="'map row' runs every friction coefficient at one H/L; 'map assemble' "
+        "joins the rows, numbers the behaviours and draws the map.",
+    )
+    steps = mapping.add_subparsers(dest="map_command", required=True, metavar="STEP")
+    row = steps.add_parser("row", help="one H/L, every f")
+    row.add_argument("--height-ratio", type=_positive_float, required=True, help="H/L")
+    row.add_argument("--frictions", type=_positive_float, nargs=3, default=[0.10, 1.40, 0.01],
+                     metavar=("START", "STOP", "STEP"), help="friction coefficients "
+                     "(%(default)s)")
+    row.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
+                     help="elements along the contact (%(default)s)")
+    row.add_argument("--normal-load", type=float, default=default.NORMAL_LOAD_N,
+                     help="N, newtons (%(default)s)")
+    row.add_argument("--tangential-step", type=float, default=default.TANGENTIAL_STEP_N,
+                     help="T step, newtons (%(default)s)")
+    row.add_argument("--normal-control", choices=["force", "displacement"],
+                     default=default.MAP_NORMAL_CONTROL,
+                     help="held after the normal loading: N (force) or the flat's normal "
+                     "position (%(default)s)")
+    row.add_argument("--normal-friction", choices=["on", "off"],
+                     default="on" if default.MAP_NORMAL_FRICTION else "off",
+                     help="friction during the normal loading (%(default)s)")
+    row.add_argument("--min-zone", type=_positive_float, default=default.MIN_ZONE_MM,
+                     help="shortest zone that decides anything, mm (%(default)s)")
+    row.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
+    row.set_defaults(run=_map_row)
+    assemble = steps.add_parser("assemble", help="join rows, name behaviours, draw the map")
+    assemble.add_argument("rows", type=Path, nargs="+", help="netCDF rows of 'slipwave map row'")
+    assemble.add_argument("-o", "--output", type=Path, required=True, help="map netCDF")
+    assemble.add_argument("--csv", type=Path, required=True, help="map table (CSV)")
+    assemble.add_argument("--legend", type=Path, required=True,
+                          help="the behaviours in words (Markdown)")
+    assemble.add_argument("--figure", type=Path, required=True, help="map figure (PNG)")
+    assemble.add_argument("--zones", type=Path, default=None,
+                          help="zone histories of one case per behaviour (PNG)")
+    assemble.add_argument("--summary", type=Path, default=None,
+                          help="campaign summary CSV: tests placed on the map")
+    assemble.add_argument("--test-ratio", type=_column_pair, nargs="*", default=[],
+                          metavar="TEST=H/L", help="H/L of each test's slab")
+    assemble.set_defaults(run=_map_assemble)
 
     bench = commands.add_parser(
         "bench", help="generate a virtual-bench campaign (CSVs, videos, truth)",

@@ -31,6 +31,15 @@ NORMAL_LOAD_N = 76.0
 TANGENTIAL_STEP_N = 2.0
 """Tangential load increment of the paper's numerical study, N."""
 
+# The behaviour map (slipwave.map; config section ``map``).
+MIN_ZONE_MM = 1.0
+"""Shortest zone (mm) that decides a behaviour: two elements of the 160-element mesh."""
+MAP_NORMAL_CONTROL = "force"
+"""What the map holds after the normal loading: ``force`` (N, the paper's setting) or
+``displacement`` (the flat's normal position)."""
+MAP_NORMAL_FRICTION = False
+"""Whether friction acts during the map's normal loading (see README, "behaviour map")."""
+
 # Event detection (slipwave.events; config section ``detection``).
 THRESHOLD = 8.0
 """Default drop and jump thresholds, in noise standard deviations."""

@@ -14,7 +14,7 @@ import seaborn as sns
 import xarray as xr
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
-from matplotlib.patches import Patch
+from matplotlib.patches import Patch, Rectangle
 
 from slipwave.errors import SlipwaveError
 from slipwave.events.summary import PHASES, load_ratio
@@ -121,6 +121,9 @@ def figure_png(fig: Figure, *, dpi: int = 110) -> bytes:
 
 
 ZONE_COLOURS = {"open": "#f2f2f2", "stick": "#4c72b0", "slip": "#dd8452"}
+CONDITION_COLOURS = {"open": "#f2f2f2", "stick": "#4c72b0", "slip (driven by T)": "#dd8452",
+                     "slip (unloading, +x)": "#f3c9a6"}
+"""Colours of the zone conditions of :mod:`slipwave.solver.zones`, slip split by direction."""
 
 
 def plot_zones(simulation: xr.Dataset, *, vertical: str = "T") -> Figure:
@@ -259,3 +262,142 @@ def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
         ax.set_title(f"{time:.2f} s", fontsize=8)
         ax.axis("off")
     return fig
+
+
+def plot_zone_histories(cases: list[tuple[str, xr.Dataset]], *, columns: int = 4) -> Figure:
+    """Zone space-time diagrams of several simulations, one panel each.
+
+    Each node at each tangential step is open, sticking, slipping the way the flat
+    drags it (towards -x relative to the flat: driven by T) or slipping outward at
+    the right edge as T unloads it (+x); x across, T upwards, up to gross sliding.
+
+    Parameters
+    ----------
+    cases
+        (title, simulation) pairs.
+    columns
+        Panels per row.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The panels and one legend.
+
+    """
+    from slipwave.solver.zones import node_conditions
+
+    if not cases:
+        raise SlipwaveError("no simulation to draw")
+    columns = min(columns, len(cases))
+    rows = -(-len(cases) // columns)
+    fig = Figure(figsize=(2.1 * columns + 0.4, 2.3 * rows + 0.8), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, columns, squeeze=False)).ravel()
+    colours = ListedColormap(list(CONDITION_COLOURS.values()))
+    for ax, (title, ds) in zip(axes, cases, strict=False):
+        tangential = np.flatnonzero(ds["phase"].values == "tangential")
+        codes = node_conditions(ds["state"].values[tangential],
+                                ds["slip_direction"].values[tangential])
+        T = ds["T"].values[tangential]
+        x = ds["x"].values
+        edges_x = np.concatenate([[x[0]], 0.5 * (x[1:] + x[:-1]), [x[-1]]])
+        edges_y = np.arange(T.size + 1) - 0.5
+        ax.pcolormesh(edges_x, edges_y, codes, cmap=colours, vmin=-0.5, vmax=3.5)
+        ticks = np.linspace(0, T.size - 1, min(4, T.size)).round().astype(int)
+        ax.set_yticks(ticks, [f"{T[k]:.0f}" for k in ticks])
+        ax.set_title(title, fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in axes[len(cases):]:
+        ax.set_visible(False)
+    fig.supxlabel("x along the contact [mm] (flat moving towards +x)", fontsize=9)
+    fig.supylabel("tangential load T [N]", fontsize=9)
+    fig.legend(handles=[Patch(color=c, label=k, ec="#999999") for k, c in
+                        CONDITION_COLOURS.items()],
+               loc="outside upper center", ncols=4, frameon=False, fontsize=8)
+    return fig
+
+
+def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
+    """The behaviour map (the paper's figure 2): f upwards, H/L across.
+
+    Each case is coloured by its behaviour (legend in words below the map), the
+    regions named ZD and ZG are labelled on the map, and the cases whose first
+    opening is at the right edge (the paper's L) are outlined by a dashed line.
+    With ``tests`` (:func:`slipwave.map.place_tests`), each test is a point at its
+    H/L and measured T/N at gross slips, with its confidence interval.
+
+    Parameters
+    ----------
+    whole
+        From :func:`slipwave.map.assemble_map`.
+    tests
+        The campaign's tests, or ``None``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The map and its legend.
+
+    """
+    import textwrap
+
+    hl = whole["height_ratio"].values
+    f = whole["friction"].values
+    grid = whole["behaviour"].values
+    ids = whole["behaviour_id"].values
+    names = [str(n) for n in whole["behaviour_name"].values]
+    palette = [*sns.color_palette("tab20", 20), *sns.color_palette("tab20b", 20),
+               *sns.color_palette("tab20c", 20)]
+    colours = ListedColormap([palette[k % len(palette)] for k in range(ids.size)])
+
+    def edges(values: np.ndarray) -> np.ndarray:
+        if values.size == 1:
+            return np.array([values[0] - 0.05, values[0] + 0.05])
+        middle = 0.5 * (values[1:] + values[:-1])
+        return np.concatenate([[values[0] - (middle[0] - values[0])], middle,
+                               [values[-1] + (values[-1] - middle[-1])]])
+
+    legend_lines = [textwrap.fill(f"{name}: {sequence}", 110, subsequent_indent="      ")
+                    for name, sequence in zip(names, whole["behaviours"].values, strict=True)]
+    legend_height = 0.16 * sum(line.count("\n") + 1 for line in legend_lines) + 0.6
+    fig = Figure(figsize=(8.0, 6.0 + legend_height), layout="constrained")
+    ax, legend_ax = fig.subplots(2, 1, height_ratios=[6.0, legend_height])
+    ax.pcolormesh(edges(hl), edges(f), grid.T, cmap=colours, vmin=ids[0] - 0.5,
+                  vmax=ids[-1] + 0.5)
+    # The paper's L: first opening at the right edge (dashed outline of those cases).
+    if np.unique(whole["L"].values).size > 1:
+        ax.contour(hl, f, whole["L"].values.T.astype(float), levels=[0.5], colors="black",
+                   linestyles="dashed", linewidths=1.0)
+    for family in ("ZD", "ZG"):
+        mask = np.isin(grid, ids[[n.startswith(family) for n in names]])
+        if mask.any():
+            i, j = np.nonzero(mask)
+            k = int(np.argmin(np.hypot(i - i.mean(), (j - j.mean()) / 10)))
+            ax.text(hl[i[k]], f[j[k]], family, ha="center", va="center", fontsize=12,
+                    fontweight="bold", color="black",
+                    bbox={"boxstyle": "round", "fc": "white", "alpha": 0.7, "lw": 0})
+    if tests is not None and len(tests):
+        ax.errorbar(tests["height_ratio"], tests["ratio"],
+                    yerr=[tests["ratio"] - tests["ci_low"], tests["ci_high"] - tests["ratio"]],
+                    fmt="o", color="black", mfc="white", ms=6, capsize=3,
+                    label="campaign tests (T/N at gross slips)")
+        for _, test in tests.iterrows():
+            ax.annotate(str(test["test_id"]), (test["height_ratio"], test["ratio"]),
+                        xytext=(6, 4), textcoords="offset points", fontsize=8)
+        ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel("slab height over contact length H/L")
+    ax.set_ylabel("friction coefficient f")
+    control = ("N held" if whole.attrs.get("normal_control") == "force"
+               else "normal displacement held")
+    ax.set_title(f"Interface behaviour, {grid.size} cases ({control}; dashed: first opening at "
+                 "the right edge, L)", fontsize=10)
+    legend_ax.set_axis_off()
+    y = 1.0
+    step = 1.0 / max(1, sum(line.count("\n") + 1 for line in legend_lines))
+    for k, line in enumerate(legend_lines):
+        legend_ax.add_patch(Rectangle((0.0, y - step * 0.85), 0.02, step * 0.75,
+                                      transform=legend_ax.transAxes, color=colours(k)))
+        legend_ax.text(0.03, y, line, transform=legend_ax.transAxes, fontsize=6.5, va="top",
+                       family="monospace")
+        y -= step * (line.count("\n") + 1)
+    return fig
+

@@ -35,3 +35,12 @@ def video_options(wildcards, input):
         f"--kymograph {input.kymograph} --waves {input.waves} --fused {input.fused} "
         f"--clock {input.clock} --frames {input.frames}"
     )
+
+
+def map_row_options(wildcards):
+    settings = config["map"]
+    friction = "on" if settings["normal_friction"] else "off"
+    return (
+        f"--elements {settings['elements']} --normal-control {settings['normal_control']} "
+        f"--normal-friction {friction} --min-zone {settings['min_zone_mm']}"
+    )

@@ -1,222 +1,410 @@
-"""The behaviour of the interface during a simulation, as the paper maps it.
+"""The behaviour of the interface: the succession of events a simulation went through.
 
-The paper (Zeghloul, Dubourg & Villechaise, 1994) sorts its 1572 cases into
-behaviours by the sequence of events at the interface. Two are named:
+The paper (Zeghloul, Dubourg & Villechaise, 1994) sorts its 1572 cases by "the
+succession of events (sliding, sticking and opening)" at the interface, and names
+two of its behaviours:
 
-- **ZD**: a slip zone sweeping the interface from the right edge to the left.
-  Here: ``first_slip == "right"`` and ``sweep == "right_to_left"``.
-- **ZG**: a slip zone starting mid-interface and sweeping to the right.
-  Here: ``first_slip == "interior"`` and ``sweep == "from_interior_to_right"``.
-- The mark **L**, the first opening appearing at the right edge of the
-  contact, is ``first_opening == "right"``.
+- **ZD**: a slip zone sweeping the interface from the right edge to the left;
+- **ZG**: a slip zone starting mid-interface and sweeping it to the right;
 
-Two simulations have the same :attr:`Behaviour.label` when, and only when,
-their sequences of events are the same.
+and marks **L** the cases whose first opening appears at the right edge.
+
+:func:`describe_behaviour` reads the succession from the zone history
+(:mod:`slipwave.solver.zones`) of the tangential loading, up to gross sliding:
+
+- openings (an open zone appearing where the contact was closed after the normal
+  loading: at the right edge, the left edge or inside);
+- slip zones driven by the tangential load, i.e. the slab slipping towards -x
+  relative to the flat, which drags it to +x. Each has an origin (``right edge``,
+  ``left edge``, ``inside``, or ``left edge, continuing the normal loading's slip``
+  when it is the edge zone the normal loading left, going on in the same
+  direction), a sweep (which way it grew: ``right-to-left``, ``left-to-right``,
+  ``both ways`` when neither side grew twice as far as the other, or ``in place``)
+  and how far (mm) until it merged, re-stuck or the contact slid;
+- merges of slip zones and re-sticking (a slip zone vanishing before gross
+  sliding);
+- the end: ``gross sliding`` or ``jammed`` (see :func:`~slipwave.solver.simulate`).
+
+The outward slip at the right edge as the tangential load unloads it (the slab
+slipping towards +x there, the way the normal loading made it slip) is not driven
+by T: it is listed among the events (``unloading slip``) but does not enter the
+succession. Zones shorter than ``min_size`` (mm) decide nothing.
+
+Two cases have the same behaviour when their successions are equal; the succession
+carries no number (positions, loads and sweep lengths are in :attr:`Behaviour.events`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy import ndimage
 
-from slipwave.solver.contact import OPEN, SLIP
+from slipwave.defaults import MIN_ZONE_MM
+from slipwave.solver.zones import CONDITIONS, follow_zones, node_conditions
 
-_EDGE_FRACTION = 0.05  # a zone within 5 % of L of an end of the contact starts "at" it
+MIN_SWEEP_FRACTION = 0.05
+"""A slip zone enters the succession once it has covered this fraction of the contact."""
+
+_DOMINANT = 2.0  # a sweep has a direction when one side grew this many times the other
+
+ZD = "ZD"
+ZG = "ZG"
 
 
 @dataclass(frozen=True)
 class Behaviour:
-    """What happened at the interface.
+    """What happened at the interface, as a succession of events.
 
     Attributes
     ----------
-    after_normal
-        ``"full_stick"`` or ``"edge_slip"`` (slip zones at the edges after the
-        normal loading) or ``"slip"`` (elsewhere too).
-    edge_slip_extent
-        Fractions of the contact length slipping at the left and right edges
-        after the normal loading.
+    sequence
+        The succession, one phrase per event, e.g. ``("opening right", "slip zone from
+        right edge sweeps right-to-left", "gross sliding")``; no numbers in it.
+    events
+        Every event, with its step, T (N), T/N, where (mm) and, for slip zones,
+        the sweep in mm; the unloading slip at an edge is here too.
     first_opening
-        Where a node in contact after the normal loading first opens during the
-        tangential loading: ``"left"``, ``"right"``, ``"interior"`` or ``None``.
+        Where the first opening appeared (``"right"``, ``"left"``, ``"inside"``) or
+        ``None``.
+    first_opening_x
+        Its position (mm, the zone's centre when it appeared), NaN if none.
     first_slip
-        Where slip first appears during the tangential loading (same values).
-    sweep
-        How the slip zone spreads until gross sliding: ``"right_to_left"``,
-        ``"left_to_right"``, ``"edges_to_interior"``, ``"from_interior_to_left"``,
-        ``"from_interior_to_right"``, ``"from_interior"`` or ``None`` (no slip
-        before gross sliding).
-    interior_nucleation
-        Whether a separate slip zone appears inside the contact, away from the
-        edges and from the existing slip and open zones, before gross sliding.
-    partial_before_gross
-        Whether part of the contact slips before all of it does.
+        Origin of the first slip zone driven by T, or ``None``.
+    first_slip_x
+        Its position (mm), NaN if none.
+    main_slip
+        Origin and sweep of the slip zone that led to gross sliding (the largest
+        slip zone at the last step before it), or ``None``.
+    end
+        ``"gross sliding"``, ``"jammed"`` or ``"not reached"``.
     ratio_at_gross
         T/N at the first gross sliding, ``None`` if it was not reached.
-    label
-        A compact string of the above, equal for equal event sequences.
 
     """
 
-    after_normal: str
-    edge_slip_extent: tuple[float, float]
+    sequence: tuple[str, ...]
+    events: tuple[dict[str, Any], ...] = field(repr=False)
     first_opening: str | None
+    first_opening_x: float
     first_slip: str | None
-    sweep: str | None
-    interior_nucleation: bool
-    partial_before_gross: bool
+    first_slip_x: float
+    main_slip: tuple[str, str] | None
+    end: str
     ratio_at_gross: float | None
-    label: str
+
+    @property
+    def text(self) -> str:
+        """The succession as one line.
+
+        Returns
+        -------
+        str
+            The phrases joined by arrows.
+
+        """
+        return " -> ".join(self.sequence)
 
     @property
     def paper_name(self) -> str | None:
         """``"ZD"`` or ``"ZG"`` when the behaviour is one the paper names.
 
+        ZD: the slip zone that leads to gross sliding came from the right edge and
+        swept right to left. ZG: it started inside and swept to the right.
+
         Returns
         -------
         str or None
-            The paper's name, or ``None`` for an unnamed behaviour.
+            The paper's name, or ``None``.
 
         """
-        if self.first_slip == "right" and self.sweep == "right_to_left":
-            return "ZD"
-        if self.first_slip == "interior" and self.sweep == "from_interior_to_right":
-            return "ZG"
+        if self.main_slip == ("right edge", "right-to-left"):
+            return ZD
+        if self.main_slip == ("inside", "left-to-right"):
+            return ZG
         return None
 
+    @property
+    def opens_right_first(self) -> bool:
+        """The paper's mark L: the first opening appears at the right edge.
 
-def _where(mask: np.ndarray, x: np.ndarray, contact: np.ndarray) -> str:
-    """Where a set of nodes lies in the contact: left, right or interior."""
-    inside = x[contact]
-    near = _EDGE_FRACTION * (x[-1] - x[0])
-    lo, hi = float(x[mask].min()), float(x[mask].max())
-    at_left = lo <= inside.min() + near
-    at_right = hi >= inside.max() - near
-    if at_left and not at_right:
-        return "left"
-    if at_right and not at_left:
-        return "right"
-    if at_left and at_right:
-        return "both"
-    return "interior"
+        Returns
+        -------
+        bool
+            Whether the first opening is at the right edge.
+
+        """
+        return self.first_opening == "right"
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything, in plain types (for JSON or a netCDF attribute).
+
+        Returns
+        -------
+        dict
+            Fields of the behaviour, plus ``text``, ``paper_name`` and ``L``.
+
+        """
+        return {
+            "sequence": list(self.sequence), "text": self.text, "paper_name": self.paper_name,
+            "L": self.opens_right_first, "first_opening": self.first_opening,
+            "first_opening_x": _plain(self.first_opening_x), "first_slip": self.first_slip,
+            "first_slip_x": _plain(self.first_slip_x),
+            "main_slip": None if self.main_slip is None else list(self.main_slip),
+            "end": self.end, "ratio_at_gross": self.ratio_at_gross,
+            "events": [{k: _plain(v) for k, v in event.items()} for event in self.events],
+        }
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON.
+
+        Returns
+        -------
+        str
+            The JSON text.
+
+        """
+        return json.dumps(self.to_dict())
 
 
-def _region(mask: np.ndarray, x: np.ndarray) -> str:
-    """Left, right or interior third of the contact, by the centroid of ``mask``."""
-    centre = float(x[mask].mean())
-    third = (x[-1] - x[0]) / 6
-    return "left" if centre < -third else "right" if centre > third else "interior"
+def _plain(value: Any) -> Any:
+    if isinstance(value, float | np.floating):
+        return None if not np.isfinite(value) else round(float(value), 6)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
 
 
-def describe_behaviour(ds: xr.Dataset) -> Behaviour:
-    """Classify the interface behaviour of a :func:`~slipwave.solver.simulate` result.
+def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
+                       min_sweep: float | None = None) -> Behaviour:
+    """The succession of events of a :func:`~slipwave.solver.simulate` result.
 
     Parameters
     ----------
     ds
         From :func:`~slipwave.solver.simulate`.
+    min_size
+        Shortest zone that counts, mm.
+    min_sweep
+        Largest extent (mm) a slip zone must reach to enter the succession; by
+        default :data:`MIN_SWEEP_FRACTION` of the contact length.
 
     Returns
     -------
     Behaviour
-        The features of the zone history and their label.
+        The succession, its events and the paper's names.
 
     Examples
     --------
+    Frictionless normal loading, H/L 0.5, f = 1 under a constant normal load: the
+    contact opens at the right edge, the slip zone beside it sweeps the contact from
+    right to left (the paper's ZD):
+
     >>> from slipwave.solver import Slab, Coulomb, LoadPath, simulate
-    >>> behaviour = describe_behaviour(simulate(Slab(elements=40), Coulomb(fs=1.0), LoadPath()))
-    >>> behaviour.first_opening, behaviour.first_slip
-    ('right', 'right')
+    >>> ds = simulate(Slab(elements=80), Coulomb(fs=1.0),
+    ...               LoadPath(normal_control="force", normal_friction=False))
+    >>> behaviour = describe_behaviour(ds)
+    >>> behaviour.text
+    'opening right -> slip zone from right edge sweeps right-to-left -> gross sliding'
+    >>> behaviour.paper_name, behaviour.opens_right_first
+    ('ZD', True)
 
     """
     x = ds["x"].values
-    state = ds["state"].values
     phase = ds["phase"].values
     wave = ds["wave"].values
-    normal_steps = np.flatnonzero(phase == "normal")
+    T, N = ds["T"].values, ds["N"].values
+    normal_end = int(np.flatnonzero(phase == "normal")[-1])
     tangential = np.flatnonzero(phase == "tangential")
-    end_normal = state[normal_steps[-1]]
-    contact0 = end_normal != OPEN
-
-    slipping0 = end_normal == SLIP
-    left_run = int(np.argmin(slipping0)) if not slipping0.all() else slipping0.size
-    right_run = int(np.argmin(slipping0[::-1])) if not slipping0.all() else slipping0.size
-    edge_extent = (round(left_run / (x.size - 1), 4), round(right_run / (x.size - 1), 4))
-    if not slipping0.any():
-        after_normal = "full_stick"
-    elif slipping0.sum() == left_run + right_run:
-        after_normal = "edge_slip"
+    gross = tangential[wave[tangential] == "gross"]
+    if gross.size:
+        end, last = "gross sliding", int(gross[0])
     else:
-        after_normal = "slip"
-
-    gross_steps = tangential[wave[tangential] == "gross"]
-    last = int(gross_steps[0]) if gross_steps.size else (int(tangential[-1]) if tangential.size
-                                                          else -1)
-    before = tangential[tangential < last] if gross_steps.size else tangential
-
-    first_opening = None
-    for k in before:
-        opened = (state[k] == OPEN) & contact0
-        if opened.any():
-            first_opening = _where(opened, x, contact0)
-            break
-
-    # Onset of slip per node: the first tangential step it slips in, in another
-    # direction than at the end of the normal loading (edge slip going on is not new).
-    direction = ds["slip_direction"].values
-    direction0 = direction[normal_steps[-1]]
-    onset = np.full(x.size, np.iinfo(np.int64).max)
-    nucleation = False
-    previous = np.zeros(x.size, dtype=bool)
-    for k in before:
-        slipping = (state[k] == SLIP) & (direction[k] != direction0)
-        onset[slipping & (onset == np.iinfo(np.int64).max)] = k
-        zones, count = ndimage.label(slipping)
-        for zone in range(1, count + 1):
-            members = zones == zone
-            grown = ndimage.binary_dilation(previous | (state[k] == OPEN), iterations=2)
-            if not (members & grown).any() and _where(members, x, contact0) == "interior":
-                nucleation = nucleation or bool(previous.any())
-        previous = slipping
-    slipped = onset < np.iinfo(np.int64).max
-
-    first_slip = sweep = None
-    if slipped.any():
-        first = onset == onset[slipped].min()
-        first_slip = _where(first, x, state[int(onset[slipped].min())] != OPEN)
-        in_contact_at_end = state[last] != OPEN if last >= 0 else contact0
-        late = in_contact_at_end & ~slipped
-        if not late.any():
-            late = slipped & (onset == onset[slipped].max())
-        ending = _region(late, x)
-        if first_slip == "right":
-            sweep = "right_to_left" if ending != "right" else "right_only"
-        elif first_slip == "left":
-            sweep = "left_to_right" if ending != "left" else "left_only"
-        elif first_slip == "both":
-            sweep = "edges_to_interior"
-        else:
-            sweep = {"left": "from_interior_to_left", "right": "from_interior_to_right"}.get(
-                ending, "from_interior")
-
-    ratio = None
-    if gross_steps.size:
-        ratio = float(ds["T"].values[last] / ds["N"].values[last])
-    partial = bool(slipped.any())
-    label = "|".join([
-        f"N:{after_normal}",
-        f"O:{first_opening or '-'}",
-        f"S:{first_slip or '-'}",
-        f"W:{sweep or '-'}",
-        f"I:{'y' if nucleation else 'n'}",
-        f"P:{'y' if partial else 'n'}",
-        f"G:{'y' if gross_steps.size else 'n'}",
-    ])
+        end = ("jammed" if str(ds.attrs.get("gross_sliding", "")).startswith("jammed")
+               else "not reached")
+        last = int(tangential[-1]) + 1 if tangential.size else normal_end + 1
+    # The zone history from the end of the normal loading to the step before gross
+    # sliding (at gross sliding every contact node slips: one zone, nothing to read).
+    window = np.arange(normal_end, last)
+    codes = node_conditions(ds["state"].values[window], ds["slip_direction"].values[window])
+    spacing = float(x[1] - x[0])
+    seen: set[int] = set()
+    zones = []
+    for step, zone, code, first, last_node, absorbed in follow_zones(codes, spacing, min_size):
+        # A zone dates from when its condition appeared where it is (only its first row
+        # needs it); the zones of the end of the normal loading date from there.
+        onset = step if zone in seen or step == 0 else _onset(codes, step, code, first,
+                                                              last_node)
+        seen.add(zone)
+        zones.append(_Zone(int(window[step]), zone, code, float(x[first]), float(x[last_node]),
+                           last_node - first, absorbed, int(window[onset])))
+    if min_sweep is None:
+        min_sweep = MIN_SWEEP_FRACTION * float(x[-1] - x[0])
+    events = _events(zones, normal_end, T, N, min_size, min_sweep, 0.5 * float(x[0] + x[-1]))
+    if gross.size:
+        events.append({"step": last, "event": "gross sliding", "T": float(T[last]),
+                       "ratio": float(T[last] / N[last])})
+    elif end == "jammed":
+        k = int(tangential[-1])
+        events.append({"step": k, "event": "jammed", "T": float(T[k]),
+                       "ratio": float(T[k] / N[k])})
+    sequence = tuple(e["phrase"] for e in events if e.get("phrase")) + (
+        (end,) if end != "not reached" else ())
+    openings = [e for e in events if e["event"] == "opening"]
+    slips = [e for e in events if e["event"] == "slip"]
+    main = _main_slip(zones, slips)
+    for event in events:
+        event.pop("phrase", None)
+        event.pop("zone", None)
     return Behaviour(
-        after_normal=after_normal, edge_slip_extent=edge_extent, first_opening=first_opening,
-        first_slip=first_slip, sweep=sweep, interior_nucleation=nucleation,
-        partial_before_gross=partial, ratio_at_gross=ratio, label=label,
+        sequence=sequence, events=tuple(events),
+        first_opening=openings[0]["where"] if openings else None,
+        first_opening_x=openings[0]["x"] if openings else float("nan"),
+        first_slip=slips[0]["origin"] if slips else None,
+        first_slip_x=slips[0]["x"] if slips else float("nan"),
+        main_slip=None if main is None else (main["origin"], main["sweep"]),
+        end=end, ratio_at_gross=float(T[last] / N[last]) if gross.size else None,
     )
+
+
+@dataclass(frozen=True)
+class _Zone:
+    step: int
+    zone: int
+    code: int
+    left: float  # mm
+    right: float
+    size: int  # nodes - 1
+    absorbed: tuple[int, ...]
+    onset: int  # step from which the zone's condition was there, however small
+
+    @property
+    def centre(self) -> float:
+        return 0.5 * (self.left + self.right)
+
+
+_OPEN, _SLIP_BACK, _SLIP_FORWARD = (CONDITIONS.index(c) for c in
+                                    ("open", "slip_back", "slip_forward"))
+
+
+def _events(zones: list[_Zone], normal_end: int, T: np.ndarray, N: np.ndarray,
+            min_size: float, min_sweep: float, middle: float) -> list[dict[str, Any]]:
+    """Openings, slip zones (with their sweeps), merges and re-sticking, in step order."""
+    by_step: dict[int, list[_Zone]] = {}
+    life: dict[int, list[_Zone]] = {}
+    merged_at: dict[int, int] = {}
+    for zone in zones:
+        by_step.setdefault(zone.step, []).append(zone)
+        life.setdefault(zone.zone, []).append(zone)
+        for absorbed in zone.absorbed:
+            merged_at[absorbed] = zone.step
+    ends = {step: _closed_ends(group) for step, group in by_step.items()}
+    last_step = max(by_step)
+    events: list[dict[str, Any]] = []
+
+    def stamp(step: int) -> dict[str, Any]:
+        return {"step": step, "T": float(T[step]), "ratio": float(T[step] / N[step])}
+
+    for identity, rows in life.items():
+        first = rows[0]
+        at_start = first.step == normal_end
+        if first.code == _OPEN and not at_start:
+            where = _where(first, ends[normal_end])
+            events.append({**stamp(first.onset), "event": "opening", "where": where,
+                           "x": first.centre, "phrase": f"opening {where}"})
+        elif first.code == _SLIP_FORWARD and not at_start:
+            events.append({**stamp(first.onset), "event": "unloading slip",
+                           "where": _where(first, ends[first.step]), "x": first.centre})
+        elif first.code == _SLIP_BACK:
+            if at_start:
+                if len(rows) == 1:
+                    continue  # the normal loading's edge slip stopped at once
+                side = "left" if first.centre < middle else "right"
+                origin = f"{side} edge, continuing the normal loading's slip"
+            else:
+                where = _where(first, ends[first.step])
+                origin = where if where in ("inside", "whole") else f"{where} edge"
+            ended = merged_at.get(identity)
+            own = [r for r in rows if ended is None or r.step < ended] or rows[:1]
+            sweep, leftward, rightward = _sweep(own, min_size)
+            extent = max(r.right - r.left for r in rows)
+            decides = extent >= min_sweep
+            name = "slip zone inside" if origin == "inside" else f"slip zone from {origin}"
+            events.append({**stamp(first.onset), "event": "slip", "zone": identity,
+                           "origin": origin, "x": first.centre, "sweep": sweep,
+                           "swept_left": leftward, "swept_right": rightward,
+                           "extent": round(extent, 6),
+                           "phrase": f"{name} sweeps {sweep}" if decides else None})
+            if ended is not None:
+                events.append({**stamp(ended), "event": "merge", "x": rows[-1].centre,
+                               "phrase": "slip zones merge" if decides else None})
+            elif rows[-1].step < last_step:
+                events.append({**stamp(rows[-1].step + 1), "event": "re-stick",
+                               "origin": origin, "x": rows[-1].centre,
+                               "phrase": f"{name} sticks again" if decides else None})
+    rank = {"opening": 0, "unloading slip": 1, "slip": 2, "merge": 3, "re-stick": 4}
+    events.sort(key=lambda e: (e["step"], rank[e["event"]], e.get("x", 0.0)))
+    unique: list[dict[str, Any]] = []  # a merge of several zones in one step is one event
+    for event in events:
+        if event["event"] == "merge" and unique and unique[-1]["event"] == "merge" \
+                and unique[-1]["step"] == event["step"]:
+            unique[-1]["phrase"] = unique[-1]["phrase"] or event["phrase"]
+            continue
+        unique.append(event)
+    return unique
+
+
+def _onset(codes: np.ndarray, step: int, code: int, first: int, last: int) -> int:
+    """The step from which a zone's condition was present where the zone is, at any size.
+
+    A zone counts once it is ``min_size`` long, but it started when its condition first
+    appeared there: that start orders it among the events.
+    """
+    onset = step
+    while onset > 1 and (codes[onset - 1, first : last + 1] == code).any():
+        onset -= 1
+    return onset
+
+
+def _closed_ends(group: list[_Zone]) -> tuple[float, float]:
+    closed = [z for z in group if z.code != _OPEN] or group
+    return min(z.left for z in closed), max(z.right for z in closed)
+
+
+def _where(zone: _Zone, ends: tuple[float, float]) -> str:
+    """``right``, ``left``, ``whole`` or ``inside``: which ends of the contact it touches."""
+    left, right = zone.left <= ends[0], zone.right >= ends[1]
+    if left and right:
+        return "whole"
+    return "left" if left else "right" if right else "inside"
+
+
+def _sweep(rows: list[_Zone], min_size: float) -> tuple[str, float, float]:
+    """Which way a zone grew from where it appeared, and how far each way (mm)."""
+    leftward = max(0.0, rows[0].left - min(r.left for r in rows))
+    rightward = max(0.0, max(r.right for r in rows) - rows[0].right)
+    if max(leftward, rightward) < min_size:
+        sweep = "in place"
+    elif leftward >= _DOMINANT * rightward:
+        sweep = "right-to-left"
+    elif rightward >= _DOMINANT * leftward:
+        sweep = "left-to-right"
+    else:
+        sweep = "both ways"
+    return sweep, round(leftward, 6), round(rightward, 6)
+
+
+def _main_slip(zones: list[_Zone], slips: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The slip event of the zone that was largest at the last step before gross sliding."""
+    last = max(z.step for z in zones)
+    before = [z for z in zones if z.step == last and z.code == _SLIP_BACK]
+    if not before or not slips:
+        return None
+    largest = max(before, key=lambda z: z.size).zone
+    return next((e for e in slips if e["zone"] == largest), None)
+
+
+__all__ = ["CONDITIONS", "MIN_ZONE_MM", "Behaviour", "describe_behaviour"]

@@ -38,6 +38,7 @@ from slipwave.errors import SlipwaveError
 OPEN, STICK, SLIP = 0, 1, 2
 
 _MAX_ITERATIONS = 60
+_PREDICTOR = 0.9  # see _iterate
 _PLANS_KEPT = 16  # factorised zone states kept per body
 
 
@@ -118,6 +119,8 @@ class Body:
         self.cy = diagonal[self.iy]
         self.sum_x = self.K[self.ix].sum(axis=0)  # sum Q = sum_x @ u
         self.sum_y = self.K[self.iy].sum(axis=0)
+        self.column_sum_x = self.K[:, self.ix].sum(axis=1)  # K @ (1 on every x dof)
+        self.column_sum_y = self.K[:, self.iy].sum(axis=1)
         # Compliance, for the flexibility form; None when the body alone has a
         # rigid mode (then only the stiffness form is used).
         self.C = compliance
@@ -239,6 +242,7 @@ class Body:
             limit = np.where(in_wave, dynamic, static)
             may_slip = in_wave | (not cascade)
             seen: set[bytes] = set()
+            first_iteration = rounds == 0
             for _ in range(_MAX_ITERATIONS):
                 iterations += 1
                 mu = limit * sign
@@ -252,6 +256,16 @@ class Body:
                 new = (pressure > 0).view(np.int8).copy()  # OPEN 0, STICK 1
                 bound = limit * np.maximum(pressure, 0.0)
                 slipping = (new == STICK) & may_slip & (np.abs(trial) > bound)
+                if first_iteration:
+                    # A slip front advances about a node per active-set iteration: a
+                    # stuck node beside the slip, already within 10 % of its limit,
+                    # starts the increment slipping (it sticks again in the next
+                    # iteration if it does not slip). This saves iterations, each a new
+                    # factorisation; the converged state is the same.
+                    beside = np.convolve(slipping | (state == SLIP), [1, 1, 1], "same") > 0
+                    slipping |= ((new == STICK) & may_slip & beside
+                                 & (np.abs(trial) > _PREDICTOR * bound))
+                    first_iteration = False
                 new[slipping] = SLIP
                 if (control.dx is None and control.machine == 0.0
                         and not (new == STICK).any() and slipping.any()):
@@ -262,7 +276,8 @@ class Body:
                     excess = np.where(slipping, np.abs(trial) - bound, np.inf)
                     new[np.argmin(excess)] = STICK
                     slipping = new == SLIP
-                new_sign = np.where(slipping, np.sign(trial), sign)
+                # (a frictionless slip carries no shear: its sign changes nothing)
+                new_sign = np.where(slipping & (limit > 0), np.sign(trial), sign)
                 if (new == state).all() and (new_sign == sign).all():
                     break
                 key = new.tobytes() + new_sign.tobytes()
@@ -429,6 +444,14 @@ def _block(matrix: np.ndarray, rows: np.ndarray, columns: np.ndarray) -> np.ndar
     return matrix.take(rows, axis=0).take(columns, axis=1)
 
 
+def _columns_sum(K: np.ndarray, chosen: np.ndarray, others: np.ndarray,
+                 total: np.ndarray) -> np.ndarray:
+    """``K[:, chosen].sum(axis=1)``, from the total less the others when they are fewer."""
+    if others.size < chosen.size:
+        return total - K[:, others].sum(axis=1)
+    return K[:, chosen].sum(axis=1)
+
+
 class _Plan:
     """The factorised linear problem of one zone state (either form)."""
 
@@ -483,9 +506,12 @@ class _Plan:
         M = np.vstack([M, *extra]) if extra else M
         # What the flat's motion does to the equations: a column where it is
         # unknown, a right-hand side term where it is given.
-        flat = K @ np.stack([self.along_x, self.along_y], axis=1)
-        self.flat_x = self._equations(flat[:, 0])
-        self.flat_y = self._equations(flat[:, 1])
+        # K @ along: the columns of the stuck x (contact y) dofs summed, from the sum over
+        # all x (y) columns less the few that are not (cheaper than a product).
+        flat_x = _columns_sum(K, ix[self.stick], ix[~self.stick], body.column_sum_x)
+        flat_y = _columns_sum(K, iy[self.contact], iy[~self.contact], body.column_sum_y)
+        self.flat_x = self._equations(flat_x)
+        self.flat_y = self._equations(flat_y)
         if self.T_given:
             self.flat_x[self.rows.size] += self.machine  # the machine spring on the flat
         columns = [M]

@@ -11,11 +11,16 @@ import xarray as xr
 from slipwave import __version__
 from slipwave.defaults import CONVENTIONS, NORMAL_LOAD_N, TANGENTIAL_STEP_N
 from slipwave.errors import SlipwaveError, SolverError
-from slipwave.solver.contact import OPEN, Body, Control, Increment, NotConverged
+from slipwave.solver.contact import OPEN, STICK, Body, Control, Increment, NotConverged
 from slipwave.solver.slab import Condensed, Slab, condense
 
 RESIDUAL_TOLERANCE = 1e-8
 """Largest relative complementarity residual of a returned step."""
+
+ASYMPTOTIC_LOAD_RATIO = 100.0
+"""Under a held normal displacement, a contact whose zero-approach limit sticks is
+jammed once T reaches this many times the normal load: the normal approach then
+weighs less than 1 % in the state, which is that limit's."""
 
 _MAX_SPLITS = 6  # sub-stepping depth: an increment is cut into at most 64 parts
 
@@ -104,12 +109,17 @@ class LoadPath:
         (both then required): T = k (X - DT), so a slip releases load and the
         flat's travel DT shows it, as on the bench.
     max_tangential_load
-        Stop the load-controlled phase there (N) if the contact has not slid by
-        then; by default four times ``normal_load``. Under a held normal
-        displacement N grows with T, and a tall or strongly frictional slab may
-        never slide (it jams): the dataset's ``gross_sliding`` attribute says so.
+        If set, stop the load-controlled phase there (N) if the contact has not
+        slid by then. By default there is no cap: a run ends at gross sliding, or
+        (held normal displacement) when the contact is found jammed; the
+        dataset's ``gross_sliding`` attribute says which.
     max_steps
         Safety bound on the number of steps.
+    normal_friction
+        Whether friction acts during the normal loading (the flat pressed with
+        friction, the edges held: a locked-in shear); ``False``: the normal
+        loading is frictionless and friction acts from the first tangential
+        increment.
 
     """
 
@@ -122,6 +132,7 @@ class LoadPath:
     machine_stiffness: float | None = None
     max_tangential_load: float | None = None
     max_steps: int = 5000
+    normal_friction: bool = True
 
     def __post_init__(self) -> None:
         if not (self.normal_load > 0 and self.tangential_step > 0 and self.normal_steps >= 1):
@@ -154,6 +165,8 @@ class _Run:
     guess_sign: np.ndarray | None = None
     reached_gross: bool = False
     gross_slips: int = 0
+    frictionless: bool = False
+    jammed: bool = False
 
     def __post_init__(self) -> None:
         self.tributary = self.slab.tributary_length
@@ -172,6 +185,8 @@ class _Run:
 
     def _attempt(self, control: Control) -> Increment:
         fs, fd = self.friction.static_after(self.gross_slips), self.friction.dynamic
+        if self.frictionless:
+            fs = fd = 0.0
         increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess,
                                               self.guess_sign)
         if not increment.residual <= RESIDUAL_TOLERANCE:
@@ -340,23 +355,28 @@ def simulate(
     width = slab.width
 
     previous = Control(dx=0.0, N=0.0)
+    run.frictionless = not path.normal_friction
     for k in range(1, path.normal_steps + 1):
         control = Control(dx=0.0, N=path.normal_load / width * k / path.normal_steps)
         run.advance(previous, control, "normal")
         previous = control
 
     held = run.steps[-1]["approach"]
+    run.frictionless = False
+    run.guess = run.guess_sign = None
 
     def hold(**motion: float) -> Control:
         if path.normal_control == "displacement":
             return Control(dy=held, **motion)
         return Control(N=path.normal_load / width, **motion)
 
-    # Tangential loading by load increments, until the contact cannot carry T.
+    # Tangential loading by load increments, until gross sliding, or until the
+    # contact is found jammed (held normal displacement only: see _jammed).
     start_T = run.steps[-1]["T"] / width
     step_travel = path.tangential_step / width / _stick_stiffness(body, path.normal_control)
     k = 1
-    cap = path.max_tangential_load or 4.0 * path.normal_load
+    cap = path.max_tangential_load or np.inf
+    can_jam = path.normal_control == "displacement" and _may_jam(run)
     while path.machine_stiffness is None and len(run.steps) < path.max_steps:
         if start_T + k * path.tangential_step / width > cap / width + 1e-12:
             break
@@ -372,6 +392,10 @@ def simulate(
                 run.record(run._split(previous, control, depth=1), "tangential", advanced=True)
         k += 1
         if run.gross:
+            break
+        if can_jam and (_jammed(run.steps[-3:], run.friction.fs)
+                        or run.steps[-1]["T"] >= ASYMPTOTIC_LOAD_RATIO * path.normal_load):
+            run.jammed = True
             break
 
     run.reached_gross = run.gross
@@ -410,6 +434,54 @@ def _drive_through_machine(run: _Run, path: LoadPath, hold: Any) -> None:
         run.reached_gross = run.reached_gross or run.gross
         run.count_gross()
         previous = control
+
+
+def _may_jam(run: _Run) -> bool:
+    """Whether the contact can jam: its state when T dwarfs the normal loading sticks.
+
+    Under a held normal displacement N grows with T. Once T is large the normal
+    approach and the path are negligible, and the problem is the flat at zero
+    approach loaded by T alone, which is positively homogeneous in T (Coulomb's law
+    and unilateral contact scale with the loads): its zone state is the same at
+    every T. If that state slides, gross sliding comes at a finite T, and the run
+    goes on until it does; if some of it sticks, the contact may jam.
+    """
+    if run.slab.profile is not None:
+        return False  # an initial gap breaks the scaling: no asymptote to read
+    fs, fd = run.friction.fs, run.friction.dynamic
+    try:
+        limit = run.body.solve_increment(Control(T=1.0, dy=0.0), np.zeros(run.body.n), fs, fd)
+    except NotConverged:
+        return False
+    return bool(limit.residual <= RESIDUAL_TOLERANCE and (limit.state == STICK).any())
+
+
+def _jammed(last: list[dict[str, Any]], fs: float) -> bool:
+    """Whether the contact has jammed: its present zone state holds for every larger T.
+
+    Over the last three steps the zone state (and slip directions) did not change,
+    so the response to T is linear: pressure and shear grow by fixed increments per
+    step. The state then holds for ever if no contact node's pressure decreases, no
+    open node closes, and every sticking node's shear increment stays below fs times
+    its pressure increment: along that straight line |q| / p moves monotonically
+    from its present value (below fs) towards |dq| / dp (below fs too), so it never
+    reaches fs and no node can start slipping; the whole contact can never slip.
+    """
+    if len(last) < 3:
+        return False
+    a, b, c = last
+    same = (np.array_equal(a["state"], b["state"]) and np.array_equal(b["state"], c["state"])
+            and np.array_equal(b["slip_direction"], c["slip_direction"]))
+    if not same or (c["wave"] != "none" and not (c["state"] == STICK).any()):
+        return False
+    dp, dq = c["p"] - b["p"], c["q"] - b["q"]
+    if not np.allclose(dp, b["p"] - a["p"], rtol=1e-6, atol=1e-12):
+        return False  # not yet linear
+    contact, stick = c["state"] != OPEN, c["state"] == STICK
+    dgap = c["gap"] - b["gap"]
+    margin = 1.0 - 1e-9
+    return bool(stick.any() and (dp[contact] >= 0).all() and (dgap[~contact] >= 0).all()
+                and (np.abs(dq[stick]) < margin * fs * dp[stick]).all())
 
 
 def _stick_stiffness(body: Body, normal_control: str) -> float:
@@ -527,6 +599,8 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         attrs["friction_fs_final"] = run.friction.fs_final
         attrs["friction_runin_slips"] = run.friction.runin_slips
     attrs.update({f"path_{k}": ("none" if v is None else v) for k, v in asdict(path).items()})
-    attrs["gross_sliding"] = "reached" if run.reached_gross else (
-        "not reached: the tangential load cap or step limit came first")
+    attrs["gross_sliding"] = ("reached" if run.reached_gross else
+                              "jammed: no further increment can make the whole contact slip"
+                              if run.jammed else
+                              "not reached: the tangential load cap or step limit came first")
     return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -109,8 +109,75 @@ def zone_runs(codes: np.ndarray, spacing: float, min_size: float) -> list[tuple[
     return [(code, a, b) for code, a, b in runs]
 
 
+Zone = tuple[int, int, int, int, int, tuple[int, ...]]
+"""A zone at a step: (step, identity, condition code, first node, last node, identities
+of the previous step's zones it absorbed)."""
+
+
+def follow_zones(codes: np.ndarray, spacing: float, min_size: float) -> list[Zone]:
+    """Every zone at every step, with an identity kept from step to step (plain tuples).
+
+    A zone continues the zone of the previous step of the same condition that it
+    overlaps most; the others it overlaps are absorbed (a merge). A zone split in
+    two keeps its identity in its larger part.
+
+    Parameters
+    ----------
+    codes
+        (steps, nodes) condition codes (:func:`node_conditions`).
+    spacing
+        Distance between nodes, mm.
+    min_size
+        Shortest zone that counts, mm (:func:`zone_runs`).
+
+    Returns
+    -------
+    list of tuple
+        :data:`Zone` tuples, step by step, left to right.
+
+    Examples
+    --------
+    >>> codes = np.array([[1] * 8, [1] * 6 + [2] * 2, [1] * 3 + [2] * 5])
+    >>> [z for z in follow_zones(codes, 1.0, 1.5) if z[2] == 2]
+    [(1, 1, 2, 6, 7, ()), (2, 1, 2, 3, 7, ())]
+    """
+    out: list[Zone] = []
+    previous: list[tuple[int, int, int, int]] = []  # (zone, code, first, last)
+    next_zone = 0
+    for step, line in enumerate(codes):
+        current: list[tuple[int, int, int, int]] = []
+        absorbed_by: list[tuple[int, ...]] = []
+        for code, first, last in zone_runs(line, spacing, min_size):
+            overlap = sorted(((min(last, b) - max(first, a) + 1, zone)
+                              for zone, c, a, b in previous
+                              if c == code and a <= last and b >= first), reverse=True)
+            if overlap:
+                zone, absorbed = overlap[0][1], tuple(z for _, z in overlap[1:])
+            else:
+                zone, next_zone, absorbed = next_zone, next_zone + 1, ()
+            current.append((zone, code, first, last))
+            absorbed_by.append(absorbed)
+        seen: dict[int, int] = {}
+        for k, (zone, _, first, last) in enumerate(current):
+            if zone in seen:  # a split: the smaller part is a new zone
+                other = seen[zone]
+                keep, give = ((other, k) if current[other][3] - current[other][2]
+                              >= last - first else (k, other))
+                _, c, a, b = current[give]
+                current[give] = (next_zone, c, a, b)
+                seen[zone] = keep
+                next_zone += 1
+            else:
+                seen[zone] = k
+        out.extend((step, zone, code, first, last, absorbed)
+                   for (zone, code, first, last), absorbed in zip(current, absorbed_by,
+                                                                  strict=True))
+        previous = current
+    return out
+
+
 def track_zones(codes: np.ndarray, x: np.ndarray, *, min_size: float) -> pd.DataFrame:
-    """Every zone at every step, with an identity kept from step to step.
+    """Every zone at every step, with an identity kept from step to step, as a table.
 
     Parameters
     ----------
@@ -127,7 +194,7 @@ def track_zones(codes: np.ndarray, x: np.ndarray, *, min_size: float) -> pd.Data
         One row per zone and step: ``step``, ``zone`` (identity), ``condition``,
         ``first``, ``last`` (nodes), ``x_left``, ``x_right`` (mm), ``merged``
         (identities of the zones of the previous step it absorbed, space
-        separated).
+        separated). See :func:`follow_zones`.
 
     Examples
     --------
@@ -139,39 +206,11 @@ def track_zones(codes: np.ndarray, x: np.ndarray, *, min_size: float) -> pd.Data
     [[1, 1, 6], [2, 1, 3]]
     """
     spacing = float(x[1] - x[0]) if x.size > 1 else 1.0
-    rows = []
-    previous: list[tuple[int, int, int, int]] = []  # (zone, code, first, last)
-    next_zone = 0
-    for step, line in enumerate(codes):
-        current = []
-        for code, first, last in zone_runs(line, spacing, min_size):
-            overlap = [(min(last, b) - max(first, a) + 1, zone)
-                       for zone, c, a, b in previous if c == code and a <= last and b >= first]
-            overlap.sort(reverse=True)
-            if overlap:
-                zone = overlap[0][1]
-                absorbed = " ".join(str(z) for _, z in overlap[1:])
-            else:
-                zone, next_zone, absorbed = next_zone, next_zone + 1, ""
-            current.append((zone, code, first, last))
-            rows.append({"step": step, "zone": zone, "condition": CONDITIONS[code],
-                         "first": first, "last": last, "x_left": float(x[first]),
-                         "x_right": float(x[last]), "merged": absorbed})
-        # a zone split in two keeps its identity in its larger part only
-        seen: dict[int, int] = {}
-        for k, (zone, _, first, last) in enumerate(current):
-            if zone in seen:
-                other = seen[zone]
-                keep, give = ((other, k) if current[other][3] - current[other][2]
-                              >= last - first else (k, other))
-                _, c, a, b = current[give]
-                current[give] = (next_zone, c, a, b)
-                rows[len(rows) - len(current) + give]["zone"] = next_zone
-                seen[zone] = keep
-                next_zone += 1
-            else:
-                seen[zone] = k
-        previous = current
+    rows = [{"step": step, "zone": zone, "condition": CONDITIONS[code], "first": first,
+             "last": last, "x_left": float(x[first]), "x_right": float(x[last]),
+             "merged": " ".join(str(z) for z in absorbed)}
+            for step, zone, code, first, last, absorbed in follow_zones(codes, spacing,
+                                                                         min_size)]
     return pd.DataFrame(rows, columns=["step", "zone", "condition", "first", "last", "x_left",
                                        "x_right", "merged"])
 

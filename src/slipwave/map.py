@@ -1,0 +1,462 @@
+"""The paper's behaviour map: the interface's succession of events over f x H/L.
+
+The paper (its figure 2) runs 1572 cases, f = 0.10..1.40 step 0.01 times H/L in
+0.1..1.0 step 0.1, 1.2 and 1.5, about 76 N normal load then 2 N tangential
+increments until gross sliding, and sorts them by the succession of events at the
+interface. :func:`map_row` runs one H/L (one geometry: the slab is condensed once)
+over every f; :func:`assemble_map` joins the rows and numbers the behaviours;
+:func:`plot_map` draws the figure and :func:`behaviour_legend` says in words what
+each behaviour is.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+from collections.abc import Callable, Sequence
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from slipwave import __version__
+from slipwave.defaults import CONTACT_ELEMENTS, CONTACT_LENGTH_MM, CONVENTIONS
+from slipwave.errors import SlipwaveError
+from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
+from slipwave.solver.behaviour import MIN_ZONE_MM, ZD, ZG, describe_behaviour
+from slipwave.solver.slab import CondensationStore
+
+PAPER_FRICTIONS = tuple(round(0.10 + 0.01 * k, 2) for k in range(131))
+"""The paper's friction coefficients, 0.10..1.40 step 0.01."""
+PAPER_HEIGHT_RATIOS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2, 1.5)
+"""The paper's slab slendernesses H/L."""
+
+
+def map_row(
+    height_ratio: float,
+    frictions: Sequence[float],
+    *,
+    elements: int = CONTACT_ELEMENTS,
+    length: float = CONTACT_LENGTH_MM,
+    path: LoadPath | None = None,
+    min_size: float = MIN_ZONE_MM,
+    store: CondensationStore | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> xr.Dataset:
+    """One row of the map: every friction coefficient at one H/L.
+
+    Parameters
+    ----------
+    height_ratio
+        H/L of the slab.
+    frictions
+        Friction coefficients (fs = fd).
+    elements
+        Elements along the contact.
+    length
+        L, mm.
+    path
+        The load path; by default the paper's: 76 N held constant, 2 N steps.
+    min_size
+        Shortest zone that decides anything, mm.
+    store
+        Where condensed matrices are kept between processes, or ``None``.
+    progress
+        Called with (cases done, cases) after each case.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``height_ratio`` (1) and ``friction``; see :func:`assemble_map`
+        for the variables.
+
+    Raises
+    ------
+    SlipwaveError
+        If a case fails: it names the case.
+
+    Examples
+    --------
+    >>> row = map_row(0.5, [0.3, 1.0], elements=80)
+    >>> [str(s) for s in row["sequence"].values[0]][1]
+    'opening right -> slip zone from right edge sweeps right-to-left -> gross sliding'
+
+    """
+    path = path or LoadPath(normal_control="force")
+    slab = Slab(length=length, height=height_ratio * length, elements=elements)
+    started = time.perf_counter()
+    condensed = condense(slab, store=store)
+    condensation = time.perf_counter() - started
+    rows = []
+    for k, friction in enumerate(frictions):
+        started = time.perf_counter()
+        try:
+            ds = simulate(slab, Coulomb(fs=float(friction)), path, condensed=condensed)
+        except SlipwaveError as err:
+            raise SlipwaveError(f"map case H/L {height_ratio:g}, f {friction:g}: {err}") from err
+        behaviour = describe_behaviour(ds, min_size=min_size)
+        rows.append(_case(ds, behaviour, time.perf_counter() - started))
+        if progress:
+            progress(k + 1, len(frictions))
+    table = pd.DataFrame(rows)
+    data: dict[str, Any] = {}
+    for name, (attrs, kind) in _VARIABLES.items():
+        values = table[name].to_numpy()
+        data[name] = (("height_ratio", "friction"), values.astype(kind)[None, :], attrs)
+    coords = {
+        "height_ratio": ("height_ratio", [float(height_ratio)],
+                         {"units": "1", "long_name": "slab height over contact length H/L"}),
+        "friction": ("friction", np.asarray(frictions, dtype=float),
+                     {"units": "1", "long_name": "friction coefficient (fs = fd)"}),
+    }
+    attrs = {
+        "title": "slipwave behaviour map",
+        "Conventions": CONVENTIONS,
+        "source": f"slipwave {__version__} slipwave.map.map_row",
+        "contact_elements": elements,
+        "contact_length_mm": length,
+        "min_zone_mm": min_size,
+        "normal_load_N": path.normal_load,
+        "tangential_step_N": path.tangential_step,
+        "normal_control": path.normal_control,
+        "normal_friction": int(path.normal_friction),
+        "condensation_s": round(condensation, 4),
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+_VARIABLES: dict[str, tuple[dict[str, str], Any]] = {
+    "sequence": ({"long_name": "succession of events at the interface"}, object),
+    "paper_name": ({"long_name": "the paper's name of the behaviour (ZD, ZG) or empty"}, object),
+    "L": ({"long_name": "first opening at the right edge (the paper's mark L)",
+           "units": "1"}, np.int8),
+    "first_opening": ({"long_name": "where the first opening appeared (right, left, inside; "
+                                    "empty: none)"}, object),
+    "first_opening_x": ({"long_name": "centre of the first open zone when it appeared",
+                         "units": "mm"}, float),
+    "first_slip": ({"long_name": "origin of the first slip zone driven by T"}, object),
+    "first_slip_x": ({"long_name": "centre of the first slip zone when it appeared",
+                      "units": "mm"}, float),
+    "end": ({"long_name": "how the run ended: gross sliding or jammed"}, object),
+    "ratio_at_gross": ({"long_name": "T/N at gross sliding", "units": "1"}, float),
+    "steps": ({"long_name": "load steps of the run", "units": "1"}, np.int32),
+    "max_residual": ({"long_name": "largest relative complementarity residual of the run",
+                      "units": "1"}, float),
+    "seconds": ({"long_name": "wall time of the case", "units": "s"}, float),
+}
+
+
+def _case(ds: xr.Dataset, behaviour: Any, seconds: float) -> dict[str, Any]:
+    return {
+        "sequence": behaviour.text,
+        "paper_name": behaviour.paper_name or "",
+        "L": int(behaviour.opens_right_first),
+        "first_opening": behaviour.first_opening or "",
+        "first_opening_x": behaviour.first_opening_x,
+        "first_slip": behaviour.first_slip or "",
+        "first_slip_x": behaviour.first_slip_x,
+        "end": behaviour.end,
+        "ratio_at_gross": np.nan if behaviour.ratio_at_gross is None
+        else behaviour.ratio_at_gross,
+        "steps": int(ds.sizes["step"]),
+        "max_residual": float(ds["residual"].max()),
+        "seconds": seconds,
+    }
+
+
+def assemble_map(rows: Sequence[xr.Dataset]) -> xr.Dataset:
+    """Join map rows and number their behaviours.
+
+    Behaviours are numbered by how many cases show them, most first (1, 2, ...);
+    ``behaviours`` holds each number's succession of events.
+
+    Parameters
+    ----------
+    rows
+        From :func:`map_row`, any H/L order.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``height_ratio`` x ``friction``: ``behaviour`` (number), ``sequence``,
+        ``paper_name``, ``L``, ``first_opening``, ``first_opening_x``,
+        ``first_slip``, ``first_slip_x``, ``end``, ``ratio_at_gross``, ``steps``,
+        ``max_residual``, ``seconds``; and along ``behaviour_id``: ``behaviours``
+        (the succession), ``behaviour_name``, ``cases``. A behaviour whose slip
+        zone leading to gross sliding is the paper's ZD (or ZG) is named ``ZD``
+        for the most frequent such succession and ``ZD-b``, ``ZD-c``... for the
+        others; the rest are ``C<number>``.
+
+    """
+    if not rows:
+        raise SlipwaveError("no map rows to assemble")
+    whole = xr.concat(sorted(rows, key=lambda r: float(r["height_ratio"][0])),
+                      dim="height_ratio", combine_attrs="drop_conflicts")
+    counts = Counter(str(s) for s in whole["sequence"].values.ravel())
+    order = sorted(counts, key=lambda s: (-counts[s], s))
+    number = {s: k + 1 for k, s in enumerate(order)}
+    names = []
+    family_count: Counter[str] = Counter()
+    for sequence in order:
+        where = whole["sequence"].values == sequence
+        paper = Counter(str(p) for p in whole["paper_name"].values[where]).most_common(1)[0][0]
+        if paper:
+            family_count[paper] += 1
+            rank = family_count[paper]
+            names.append(paper if rank == 1 else f"{paper}-{chr(ord('a') + rank - 1)}")
+        else:
+            names.append(f"C{number[sequence]}")
+    whole["behaviour"] = (("height_ratio", "friction"),
+                          np.vectorize(lambda s: number[str(s)])(whole["sequence"].values)
+                          .astype(np.int16),
+                          {"long_name": "behaviour number (see behaviours)", "units": "1"})
+    whole = whole.assign_coords(behaviour_id=("behaviour_id", np.arange(1, len(order) + 1),
+                                              {"long_name": "behaviour number"}))
+    whole["behaviours"] = ("behaviour_id", np.array(order, dtype=object),
+                           {"long_name": "succession of events of each behaviour"})
+    whole["behaviour_name"] = ("behaviour_id", np.array(names, dtype=object),
+                               {"long_name": "the paper's name (ZD, ZG) or C<number>"})
+    whole["cases"] = ("behaviour_id", np.array([counts[s] for s in order], dtype=np.int32),
+                      {"long_name": "cases showing the behaviour", "units": "1"})
+    whole.attrs["source"] = f"slipwave {__version__} slipwave.map.assemble_map"
+    whole.attrs.pop("condensation_s", None)
+    return whole
+
+
+def map_table(whole: xr.Dataset) -> pd.DataFrame:
+    """One row per case: the map as a table (``map.csv``).
+
+    Parameters
+    ----------
+    whole
+        From :func:`assemble_map`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``height_ratio``, ``friction`` and every per-case variable.
+
+    """
+    names = [v for v, var in whole.data_vars.items()
+             if var.dims == ("height_ratio", "friction")]
+    return whole[names].to_dataframe().reset_index()
+
+
+def map_agreement(first: xr.Dataset, second: xr.Dataset, *,
+                  by: Literal["sequence", "behaviour"] = "sequence") -> float:
+    """Fraction of the cases both maps hold that have the same behaviour in both.
+
+    Parameters
+    ----------
+    first, second
+        Maps (:func:`assemble_map` or :func:`map_row`).
+    by
+        Compare the successions (behaviour numbers differ between maps).
+
+    Returns
+    -------
+    float
+        Between 0 and 1.
+
+    """
+    a, b = xr.align(first[by], second[by], join="inner")
+    if a.size == 0:
+        raise SlipwaveError("the two maps share no case")
+    return float((a.values == b.values).mean())
+
+
+def contiguity(whole: xr.Dataset) -> float:
+    """Fraction of cases sharing their behaviour with at least one of their four neighbours.
+
+    Parameters
+    ----------
+    whole
+        From :func:`assemble_map`.
+
+    Returns
+    -------
+    float
+        Between 0 and 1.
+
+    """
+    grid = whole["sequence"].values
+    same = np.zeros(grid.shape, dtype=bool)
+    same[1:, :] |= grid[1:, :] == grid[:-1, :]
+    same[:-1, :] |= grid[:-1, :] == grid[1:, :]
+    same[:, 1:] |= grid[:, 1:] == grid[:, :-1]
+    same[:, :-1] |= grid[:, :-1] == grid[:, 1:]
+    return float(same.mean())
+
+
+__all__ = [
+    "PAPER_FRICTIONS",
+    "PAPER_HEIGHT_RATIOS",
+    "ZD",
+    "ZG",
+    "assemble_map",
+    "behaviour_legend",
+    "contiguity",
+    "friction_grid",
+    "map_agreement",
+    "map_row",
+    "map_table",
+    "place_tests",
+    "representative_cases",
+    "simulate_case",
+]
+
+
+def friction_grid(start: float, stop: float, step: float) -> np.ndarray:
+    """Friction coefficients from ``start`` to ``stop`` inclusive, rounded to the step.
+
+    Parameters
+    ----------
+    start, stop, step
+        The range (``stop`` included when it falls on the grid).
+
+    Returns
+    -------
+    numpy.ndarray
+        The coefficients.
+
+    Examples
+    --------
+    >>> friction_grid(0.10, 1.40, 0.01).size
+    131
+    """
+    if not (step > 0 and stop >= start > 0):
+        raise SlipwaveError(f"friction grid {start:g}..{stop:g} step {step:g}: need "
+                            "0 < start <= stop and step > 0")
+    count = int(np.floor((stop - start) / step + 1e-9)) + 1
+    decimals = max(0, int(np.ceil(-np.log10(step) + 1e-9)) + 1)
+    return np.round(start + step * np.arange(count), decimals)
+
+
+def representative_cases(whole: xr.Dataset) -> pd.DataFrame:
+    """One case per behaviour, the one deepest inside its region of the map.
+
+    Depth is the number of the case's eight neighbours on the grid that share its
+    behaviour; ties go to the case nearest the region's centre.
+
+    Parameters
+    ----------
+    whole
+        From :func:`assemble_map`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``behaviour``, ``name``, ``height_ratio``, ``friction``, ``sequence``, in
+        behaviour order.
+
+    """
+    grid = whole["behaviour"].values
+    padded = np.pad(grid, 1, constant_values=-1)
+    depth = np.zeros(grid.shape, dtype=int)
+    rows, cols = grid.shape
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            if di or dj:
+                depth += padded[1 + di : 1 + di + rows, 1 + dj : 1 + dj + cols] == grid
+    out = []
+    for k, number in enumerate(whole["behaviour_id"].values):
+        i, j = np.nonzero(grid == number)
+        centre = np.array([i.mean(), j.mean()])
+        score = depth[i, j] * 1e6 - np.hypot(i - centre[0], j - centre[1])
+        best = int(np.argmax(score))
+        out.append({"behaviour": int(number),
+                    "name": str(whole["behaviour_name"].values[k]),
+                    "height_ratio": float(whole["height_ratio"].values[i[best]]),
+                    "friction": float(whole["friction"].values[j[best]]),
+                    "sequence": str(whole["behaviours"].values[k])})
+    return pd.DataFrame(out)
+
+
+def simulate_case(whole: xr.Dataset, height_ratio: float, friction: float, *,
+                  store: CondensationStore | None = None) -> xr.Dataset:
+    """Run one case of a map again, with the map's settings (for its zone history).
+
+    Parameters
+    ----------
+    whole
+        From :func:`assemble_map` (its attributes give the settings).
+    height_ratio, friction
+        The case.
+    store
+        Where condensed matrices are kept between processes, or ``None``.
+
+    Returns
+    -------
+    xarray.Dataset
+        From :func:`~slipwave.solver.simulate`.
+
+    """
+    attrs = whole.attrs
+    length = float(attrs["contact_length_mm"])
+    slab = Slab(length=length, height=height_ratio * length,
+                elements=int(attrs["contact_elements"]))
+    path = LoadPath(normal_load=float(attrs["normal_load_N"]),
+                    tangential_step=float(attrs["tangential_step_N"]),
+                    normal_control=str(attrs["normal_control"]),  # type: ignore[arg-type]
+                    normal_friction=bool(int(attrs["normal_friction"])))
+    return simulate(slab, Coulomb(fs=friction), path, condensed=condense(slab, store=store))
+
+
+def place_tests(summary: pd.DataFrame, height_ratios: dict[str, float]) -> pd.DataFrame:
+    """The campaign's tests on the map: their H/L and measured T/N at gross slips.
+
+    Parameters
+    ----------
+    summary
+        The campaign summary (``results/summary.csv``): ``test_id``,
+        ``static_ratio_mean``, ``static_ratio_ci_low``, ``static_ratio_ci_high``.
+    height_ratios
+        H/L of each test's slab (the campaign table's ``height_ratio``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``test_id``, ``height_ratio``, ``ratio``, ``ci_low``, ``ci_high`` for the
+        tests with an H/L and at least one gross slip.
+
+    """
+    rows = []
+    for _, test in summary.iterrows():
+        test_id = str(test["test_id"])
+        if test_id not in height_ratios or not np.isfinite(test["static_ratio_mean"]):
+            continue
+        rows.append({"test_id": test_id, "height_ratio": height_ratios[test_id],
+                     "ratio": float(test["static_ratio_mean"]),
+                     "ci_low": float(test["static_ratio_ci_low"]),
+                     "ci_high": float(test["static_ratio_ci_high"])})
+    return pd.DataFrame(rows, columns=["test_id", "height_ratio", "ratio", "ci_low", "ci_high"])
+
+
+def behaviour_legend(whole: xr.Dataset) -> str:
+    """The behaviours in words, one Markdown list item each.
+
+    Parameters
+    ----------
+    whole
+        From :func:`assemble_map`.
+
+    Returns
+    -------
+    str
+        ``- **B1** (ZD, L in 480 of 486 cases, 486 cases): slip zone from ...``.
+
+    """
+    lines = []
+    for k, number in enumerate(whole["behaviour_id"].values):
+        where = whole["behaviour"].values == number
+        name = str(whole["behaviour_name"].values[k])
+        L = int(whole["L"].values[where].sum())
+        cases = int(where.sum())
+        hl = whole["height_ratio"].values[np.nonzero(where)[0]]
+        f = whole["friction"].values[np.nonzero(where)[1]]
+        paper = f"{name.split('-')[0]}, " if name.startswith(("ZD", "ZG")) else ""
+        lines.append(f"- **{name}** ({paper}{cases} cases, L in {L}; H/L {hl.min():g}-"
+                     f"{hl.max():g}, f {f.min():.2f}-{f.max():.2f}): "
+                     f"{whole['behaviours'].values[k]}")
+    return "\n".join(lines)
