@@ -236,7 +236,13 @@ def _map_assemble(args: argparse.Namespace) -> None:
     whole = assemble_map([read_dataset(path) for path in args.rows])
     tests = None
     if args.summary is not None:
-        tests = place_tests(pd.read_csv(args.summary), dict(args.test_ratio))
+        ratios: dict[str, float | str] = {}
+        for test_id, text in args.test_ratio:
+            try:
+                ratios[test_id] = float(text)
+            except ValueError as err:
+                raise SlipwaveError(f"--test-ratio {test_id}={text}: H/L must be a number") from err
+        tests = place_tests(pd.read_csv(args.summary), ratios)
     write_dataset(whole, args.output)
     with atomic_output(args.csv) as temporary:
         map_table(whole).to_csv(temporary, index=False, float_format="%.6g")

@@ -403,7 +403,7 @@ def simulate_case(whole: xr.Dataset, height_ratio: float, friction: float, *,
     return simulate(slab, Coulomb(fs=friction), path, condensed=condense(slab, store=store))
 
 
-def place_tests(summary: pd.DataFrame, height_ratios: dict[str, float]) -> pd.DataFrame:
+def place_tests(summary: pd.DataFrame, height_ratios: dict[str, float | str]) -> pd.DataFrame:
     """The campaign's tests on the map: their H/L and measured T/N at gross slips.
 
     Parameters
@@ -426,7 +426,7 @@ def place_tests(summary: pd.DataFrame, height_ratios: dict[str, float]) -> pd.Da
         test_id = str(test["test_id"])
         if test_id not in height_ratios or not np.isfinite(test["static_ratio_mean"]):
             continue
-        rows.append({"test_id": test_id, "height_ratio": height_ratios[test_id],
+        rows.append({"test_id": test_id, "height_ratio": float(height_ratios[test_id]),
                      "ratio": float(test["static_ratio_mean"]),
                      "ci_low": float(test["static_ratio_ci_low"]),
                      "ci_high": float(test["static_ratio_ci_high"])})

@@ -290,7 +290,11 @@ def plot_zone_histories(cases: list[tuple[str, xr.Dataset]], *, columns: int = 4
         raise SlipwaveError("no simulation to draw")
     columns = min(columns, len(cases))
     rows = -(-len(cases) // columns)
-    fig = Figure(figsize=(2.1 * columns + 0.4, 2.3 * rows + 0.8), layout="constrained")
+    width, height = 2.1 * columns + 0.6, 2.3 * rows + 1.0
+    fig = Figure(figsize=(width, height))
+    # fixed margins (a constrained layout of many panels costs seconds)
+    fig.subplots_adjust(left=0.6 / width, right=1 - 0.1 / width, bottom=0.55 / height,
+                        top=1 - 0.6 / height, wspace=0.25, hspace=0.45)
     axes = np.atleast_1d(fig.subplots(rows, columns, squeeze=False)).ravel()
     colours = ListedColormap(list(CONDITION_COLOURS.values()))
     for ax, (title, ds) in zip(axes, cases, strict=False):
@@ -299,20 +303,21 @@ def plot_zone_histories(cases: list[tuple[str, xr.Dataset]], *, columns: int = 4
                                 ds["slip_direction"].values[tangential])
         T = ds["T"].values[tangential]
         x = ds["x"].values
-        edges_x = np.concatenate([[x[0]], 0.5 * (x[1:] + x[:-1]), [x[-1]]])
-        edges_y = np.arange(T.size + 1) - 0.5
-        ax.pcolormesh(edges_x, edges_y, codes, cmap=colours, vmin=-0.5, vmax=3.5)
+        half = 0.5 * float(x[1] - x[0])
+        ax.imshow(codes, cmap=colours, vmin=-0.5, vmax=3.5, origin="lower", aspect="auto",
+                  interpolation="nearest",
+                  extent=(float(x[0]) - half, float(x[-1]) + half, -0.5, T.size - 0.5))
         ticks = np.linspace(0, T.size - 1, min(4, T.size)).round().astype(int)
         ax.set_yticks(ticks, [f"{T[k]:.0f}" for k in ticks])
         ax.set_title(title, fontsize=8)
         ax.tick_params(labelsize=7)
     for ax in axes[len(cases):]:
         ax.set_visible(False)
-    fig.supxlabel("x along the contact [mm] (flat moving towards +x)", fontsize=9)
-    fig.supylabel("tangential load T [N]", fontsize=9)
+    fig.supxlabel("x along the contact [mm] (flat moving towards +x)", fontsize=9, y=0.05 / height)
+    fig.supylabel("tangential load T [N]", fontsize=9, x=0.05 / width)
     fig.legend(handles=[Patch(color=c, label=k, ec="#999999") for k, c in
                         CONDITION_COLOURS.items()],
-               loc="outside upper center", ncols=4, frameon=False, fontsize=8)
+               loc="upper center", ncols=4, frameon=False, fontsize=8)
     return fig
 
 
@@ -359,8 +364,11 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
     legend_lines = [textwrap.fill(f"{name}: {sequence}", 110, subsequent_indent="      ")
                     for name, sequence in zip(names, whole["behaviours"].values, strict=True)]
     legend_height = 0.16 * sum(line.count("\n") + 1 for line in legend_lines) + 0.6
-    fig = Figure(figsize=(8.0, 6.0 + legend_height), layout="constrained")
-    ax, legend_ax = fig.subplots(2, 1, height_ratios=[6.0, legend_height])
+    height = 6.2 + legend_height
+    fig = Figure(figsize=(8.0, height))
+    # fixed places: the map above, its legend in words below
+    ax = fig.add_axes((0.09, (legend_height + 0.75) / height, 0.88, 5.0 / height))
+    legend_ax = fig.add_axes((0.02, 0.1 / height, 0.96, legend_height / height))
     ax.pcolormesh(edges(hl), edges(f), grid.T, cmap=colours, vmin=ids[0] - 0.5,
                   vmax=ids[-1] + 0.5)
     # The paper's L: first opening at the right edge (dashed outline of those cases).

@@ -53,6 +53,8 @@ _DOMINANT = 2.0  # a sweep has a direction when one side grew this many times th
 
 ZD = "ZD"
 ZG = "ZG"
+PAPER_SWEEP_FRACTION = 0.25
+"""The least part of the contact a ZD or ZG slip zone sweeps before gross sliding."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +81,9 @@ class Behaviour:
     main_slip
         Origin and sweep of the slip zone that led to gross sliding (the largest
         slip zone at the last step before it), or ``None``.
+    main_swept
+        How far that zone swept before it merged or the contact slid, as a
+        fraction of the contact length (0 if none).
     end
         ``"gross sliding"``, ``"jammed"`` or ``"not reached"``.
     ratio_at_gross
@@ -93,6 +98,7 @@ class Behaviour:
     first_slip: str | None
     first_slip_x: float
     main_slip: tuple[str, str] | None
+    main_swept: float
     end: str
     ratio_at_gross: float | None
 
@@ -113,7 +119,9 @@ class Behaviour:
         """``"ZD"`` or ``"ZG"`` when the behaviour is one the paper names.
 
         ZD: the slip zone that leads to gross sliding came from the right edge and
-        swept right to left. ZG: it started inside and swept to the right.
+        swept right to left; ZG: it started inside and swept to the right; either way
+        over at least :data:`PAPER_SWEEP_FRACTION` of the contact ("sweeping
+        through the interface", the paper says).
 
         Returns
         -------
@@ -121,6 +129,8 @@ class Behaviour:
             The paper's name, or ``None``.
 
         """
+        if self.main_swept < PAPER_SWEEP_FRACTION:
+            return None
         if self.main_slip == ("right edge", "right-to-left"):
             return ZD
         if self.main_slip == ("inside", "left-to-right"):
@@ -154,6 +164,7 @@ class Behaviour:
             "first_opening_x": _plain(self.first_opening_x), "first_slip": self.first_slip,
             "first_slip_x": _plain(self.first_slip_x),
             "main_slip": None if self.main_slip is None else list(self.main_slip),
+            "main_swept": round(self.main_swept, 6),
             "end": self.end, "ratio_at_gross": self.ratio_at_gross,
             "events": [{k: _plain(v) for k, v in event.items()} for event in self.events],
         }
@@ -266,6 +277,8 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
         first_slip=slips[0]["origin"] if slips else None,
         first_slip_x=slips[0]["x"] if slips else float("nan"),
         main_slip=None if main is None else (main["origin"], main["sweep"]),
+        main_swept=0.0 if main is None else (main["swept_left"] + main["swept_right"])
+        / float(x[-1] - x[0]),
         end=end, ratio_at_gross=float(T[last] / N[last]) if gross.size else None,
     )
 

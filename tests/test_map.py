@@ -1,0 +1,144 @@
+"""The behaviour map: rows, assembly, names, figures and the command (issue 14)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+
+from slipwave.cli import main
+from slipwave.errors import SlipwaveError
+from slipwave.io import read_dataset
+from slipwave.map import (
+    PAPER_FRICTIONS,
+    PAPER_HEIGHT_RATIOS,
+    assemble_map,
+    behaviour_legend,
+    contiguity,
+    friction_grid,
+    map_agreement,
+    map_row,
+    map_table,
+    place_tests,
+    representative_cases,
+)
+from slipwave.plot import plot_map, plot_zone_histories
+from slipwave.solver import LoadPath
+
+PAPER_PATH = LoadPath(normal_control="force", normal_friction=False)
+
+
+def test_the_papers_grid_has_1572_cases():
+    assert len(PAPER_FRICTIONS) * len(PAPER_HEIGHT_RATIOS) == 1572
+    assert PAPER_FRICTIONS[0] == 0.10 and PAPER_FRICTIONS[-1] == 1.40
+    np.testing.assert_array_equal(friction_grid(0.10, 1.40, 0.01), PAPER_FRICTIONS)
+    with pytest.raises(SlipwaveError, match="need 0 < start <= stop"):
+        friction_grid(1.0, 0.5, 0.1)
+
+
+@pytest.fixture(scope="module")
+def small_map() -> xr.Dataset:
+    rows = [map_row(hl, [0.2, 0.6, 1.0], elements=40, path=PAPER_PATH) for hl in (0.2, 0.5)]
+    return assemble_map(rows)
+
+
+def test_rows_hold_every_case_with_its_succession(small_map):
+    assert small_map.sizes == {"height_ratio": 2, "friction": 3,
+                               "behaviour_id": small_map.sizes["behaviour_id"]}
+    assert set(small_map["end"].values.ravel()) == {"gross sliding"}
+    assert float(small_map["max_residual"].max()) < 1e-8
+    np.testing.assert_allclose(small_map["ratio_at_gross"].values,
+                               np.tile([0.2, 0.6, 1.0], (2, 1)), rtol=1e-6)
+    # numbers follow the successions: equal successions, equal numbers
+    for number, sequence in zip(small_map["behaviour_id"].values,
+                                small_map["behaviours"].values, strict=True):
+        where = small_map["behaviour"].values == number
+        assert set(small_map["sequence"].values[where]) == {sequence}
+    assert int(small_map["cases"].sum()) == 6
+    zd = small_map.sel(height_ratio=0.5, friction=1.0)
+    assert str(zd["paper_name"].values) == "ZD" and int(zd["L"]) == 1
+    assert small_map["first_opening_x"].attrs["units"] == "mm"
+
+
+def test_table_legend_and_representatives(small_map):
+    table = map_table(small_map)
+    assert len(table) == 6 and {"height_ratio", "friction", "behaviour", "sequence"} <= set(
+        table.columns)
+    legend = behaviour_legend(small_map).splitlines()
+    assert len(legend) == small_map.sizes["behaviour_id"]
+    assert legend[0].startswith("- **") and "->" in legend[0]
+    cases = representative_cases(small_map)
+    assert list(cases["behaviour"]) == list(small_map["behaviour_id"].values)
+    for case in cases.itertuples():
+        found = small_map.sel(height_ratio=case.height_ratio, friction=case.friction)
+        assert int(found["behaviour"]) == case.behaviour
+
+
+def test_contiguity_and_agreement():
+    grid = xr.Dataset({"sequence": (("height_ratio", "friction"),
+                                    np.array([["a", "a", "b"], ["a", "c", "b"]], dtype=object))},
+                      coords={"height_ratio": [0.1, 0.2], "friction": [0.1, 0.2, 0.3]})
+    assert contiguity(grid) == pytest.approx(5 / 6)  # "c" has no like neighbour
+    other = grid.copy(deep=True)
+    other["sequence"].values[1, 1] = "a"
+    assert map_agreement(grid, other) == pytest.approx(5 / 6)
+    with pytest.raises(SlipwaveError, match="share no case"):
+        map_agreement(grid, grid.assign_coords(friction=[0.5, 0.6, 0.7]))
+
+
+def test_tests_are_placed_by_their_slenderness_and_measured_ratio():
+    summary = pd.DataFrame({"test_id": ["a", "b", "c"], "static_ratio_mean": [1.0, 0.8, np.nan],
+                            "static_ratio_ci_low": [0.95, 0.7, np.nan],
+                            "static_ratio_ci_high": [1.05, 0.9, np.nan]})
+    placed = place_tests(summary, {"a": 0.5, "c": 0.75})
+    assert placed[["test_id", "height_ratio", "ratio"]].values.tolist() == [["a", 0.5, 1.0]]
+
+
+def test_figures_draw(small_map, tmp_path):
+    tests = pd.DataFrame({"test_id": ["t"], "height_ratio": [0.5], "ratio": [1.0],
+                          "ci_low": [0.9], "ci_high": [1.1]})
+    figure = plot_map(small_map, tests)
+    axes = figure.axes[0]
+    assert axes.get_xlabel().startswith("slab height") and "friction" in axes.get_ylabel()
+    assert "ZD" in [t.get_text() for t in axes.texts]
+    path = tmp_path / "map.png"
+    figure.savefig(path)
+    assert path.stat().st_size > 10_000
+    with pytest.raises(SlipwaveError, match="no simulation"):
+        plot_zone_histories([])
+
+
+def test_map_command_rows_then_assembly(tmp_path, capsys):
+    rows = []
+    for hl in ("0.3", "0.6"):
+        rows.append(tmp_path / f"hl{hl}.nc")
+        assert main(["map", "row", "--height-ratio", hl, "--frictions", "0.5", "1.0", "0.25",
+                     "--elements", "40", "-o", str(rows[-1])]) == 0
+    summary = tmp_path / "summary.csv"
+    summary.write_text("test_id,static_ratio_mean,static_ratio_ci_low,static_ratio_ci_high\n"
+                       "t,0.9,0.85,0.95\n")
+    out = {name: tmp_path / name for name in ("map.nc", "map.csv", "legend.md", "map.png",
+                                              "zones.png")}
+    assert main(["map", "assemble", *map(str, rows), "-o", str(out["map.nc"]),
+                 "--csv", str(out["map.csv"]), "--legend", str(out["legend.md"]),
+                 "--figure", str(out["map.png"]), "--zones", str(out["zones.png"]),
+                 "--summary", str(summary), "--test-ratio", "t=0.5"]) == 0
+    printed = capsys.readouterr().out
+    assert "6 cases" in printed and "0 failed" in printed
+    whole = read_dataset(out["map.nc"])
+    assert whole["friction"].values.tolist() == [0.5, 0.75, 1.0]
+    assert whole.attrs["normal_control"] == "force" and whole.attrs["normal_friction"] == 0
+    assert len(pd.read_csv(out["map.csv"])) == 6
+    assert all(out[name].stat().st_size > 5_000 for name in ("map.png", "zones.png"))
+
+
+def test_a_failing_case_is_named(monkeypatch):
+    import slipwave.map as module
+
+    def broken(*args, **kwargs):
+        raise SlipwaveError("step 3: no convergence")
+
+    monkeypatch.setattr(module, "simulate", broken)
+    with pytest.raises(SlipwaveError, match=r"map case H/L 0.5, f 0.7: step 3"):
+        map_row(0.5, [0.7], elements=20)
