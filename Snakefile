@@ -66,4 +66,5 @@ rule all:
         expand("reports/{test_id}.html", test_id=TEST_IDS),
         "results/summary.csv",
         "results/map/map.nc",
+        "results/map/map.png",
     default_target: True

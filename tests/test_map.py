@@ -121,11 +121,15 @@ def test_map_command_rows_then_assembly(tmp_path, capsys):
     out = {name: tmp_path / name for name in ("map.nc", "map.csv", "legend.md", "map.png",
                                               "zones.png")}
     assert main(["map", "assemble", *map(str, rows), "-o", str(out["map.nc"]),
-                 "--csv", str(out["map.csv"]), "--legend", str(out["legend.md"]),
-                 "--figure", str(out["map.png"]), "--zones", str(out["zones.png"]),
-                 "--summary", str(summary), "--test-ratio", "t=0.5"]) == 0
+                 "--csv", str(out["map.csv"]), "--legend", str(out["legend.md"])]) == 0
+    assert main(["map", "figures", str(out["map.nc"]), "--figure", str(out["map.png"]),
+                 "--zones", str(out["zones.png"]), "--summary", str(summary),
+                 "--test-ratio", "t=0.5"]) == 0
+    assert main(["map", "figures", str(out["map.nc"]), "--figure", str(out["map.png"]),
+                 "--summary", str(summary), "--test-ratio", "t=half"]) == 1
     printed = capsys.readouterr().out
-    assert "6 cases" in printed and "0 failed" in printed
+    assert "6 cases" in printed and "0 without gross sliding" in printed
+    assert "1 tests placed" in printed
     whole = read_dataset(out["map.nc"])
     assert whole["friction"].values.tolist() == [0.5, 0.75, 1.0]
     assert whole.attrs["normal_control"] == "force" and whole.attrs["normal_friction"] == 0

@@ -219,21 +219,31 @@ def _map_row(args: argparse.Namespace) -> None:
 
 
 def _map_assemble(args: argparse.Namespace) -> None:
+    from slipwave.io import atomic_output, read_dataset, write_dataset
+    from slipwave.map import assemble_map, behaviour_legend, map_table
+
+    whole = assemble_map([read_dataset(path) for path in args.rows])
+    write_dataset(whole, args.output)
+    with atomic_output(args.csv) as temporary:
+        map_table(whole).to_csv(temporary, index=False, float_format="%.6g")
+    with atomic_output(args.legend) as temporary:
+        temporary.write_text(behaviour_legend(whole) + "\n")
+    failed = int((whole["end"].values != "gross sliding").sum())
+    print(f"{whole['behaviour'].size} cases, {whole.sizes['behaviour_id']} behaviours, "
+          f"{failed} without gross sliding, largest residual "
+          f"{float(whole['max_residual'].max()):.2g}, mean "
+          f"{1000 * float(whole['seconds'].mean()):.1f} ms per case -> {args.output}")
+
+
+def _map_figures(args: argparse.Namespace) -> None:
     import pandas as pd
 
     from slipwave.cache import DiskCache
-    from slipwave.io import atomic_output, read_dataset, write_dataset
-    from slipwave.map import (
-        assemble_map,
-        behaviour_legend,
-        map_table,
-        place_tests,
-        representative_cases,
-        simulate_case,
-    )
+    from slipwave.io import atomic_output, read_dataset
+    from slipwave.map import place_tests, representative_cases, simulate_case
     from slipwave.plot import plot_map, plot_zone_histories
 
-    whole = assemble_map([read_dataset(path) for path in args.rows])
+    whole = read_dataset(args.map)
     tests = None
     if args.summary is not None:
         ratios: dict[str, float | str] = {}
@@ -243,11 +253,6 @@ def _map_assemble(args: argparse.Namespace) -> None:
             except ValueError as err:
                 raise SlipwaveError(f"--test-ratio {test_id}={text}: H/L must be a number") from err
         tests = place_tests(pd.read_csv(args.summary), ratios)
-    write_dataset(whole, args.output)
-    with atomic_output(args.csv) as temporary:
-        map_table(whole).to_csv(temporary, index=False, float_format="%.6g")
-    with atomic_output(args.legend) as temporary:
-        temporary.write_text(behaviour_legend(whole) + "\n")
     with atomic_output(args.figure) as temporary:
         plot_map(whole, tests).savefig(temporary, dpi=130, format="png")
     if args.zones is not None:
@@ -256,10 +261,9 @@ def _map_assemble(args: argparse.Namespace) -> None:
                  for case in representative_cases(whole).itertuples()]
         with atomic_output(args.zones) as temporary:
             plot_zone_histories(cases).savefig(temporary, dpi=130, format="png")
-    failed = int((whole["end"].values == "").sum())
-    print(f"{whole['behaviour'].size} cases, {whole.sizes['behaviour_id']} behaviours, "
-          f"{failed} failed, largest residual {float(whole['max_residual'].max()):.2g}, "
-          f"mean {1000 * float(whole['seconds'].mean()):.1f} ms per case -> {args.output}")
+    placed = 0 if tests is None else len(tests)
+    print(f"{args.map} -> {args.figure}" + (f", {args.zones}" if args.zones else "")
+          + f" ({placed} tests placed)")
 
 
 def _bench(args: argparse.Namespace) -> None:
@@ -366,7 +370,7 @@ def build_parser() -> argparse.ArgumentParser:
     mapping = commands.add_parser(
         "map", help="the behaviour map over f x H/L (the paper's figure 2)",
         description="'map row' runs every friction coefficient at one H/L; 'map assemble' "
-        "joins the rows, numbers the behaviours and draws the map.",
+        "joins the rows and numbers the behaviours; 'map figures' draws the map.",
     )
     steps = mapping.add_subparsers(dest="map_command", required=True, metavar="STEP")
     row = steps.add_parser("row", help="one H/L, every f")
@@ -391,20 +395,24 @@ def build_parser() -> argparse.ArgumentParser:
                      help="shortest zone that decides anything, mm (%(default)s)")
     row.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     row.set_defaults(run=_map_row)
-    assemble = steps.add_parser("assemble", help="join rows, name behaviours, draw the map")
+    assemble = steps.add_parser("assemble", help="join rows and name the behaviours")
     assemble.add_argument("rows", type=Path, nargs="+", help="netCDF rows of 'slipwave map row'")
     assemble.add_argument("-o", "--output", type=Path, required=True, help="map netCDF")
     assemble.add_argument("--csv", type=Path, required=True, help="map table (CSV)")
     assemble.add_argument("--legend", type=Path, required=True,
                           help="the behaviours in words (Markdown)")
-    assemble.add_argument("--figure", type=Path, required=True, help="map figure (PNG)")
-    assemble.add_argument("--zones", type=Path, default=None,
-                          help="zone histories of one case per behaviour (PNG)")
-    assemble.add_argument("--summary", type=Path, default=None,
-                          help="campaign summary CSV: tests placed on the map")
-    assemble.add_argument("--test-ratio", type=_column_pair, nargs="*", default=[],
-                          metavar="TEST=H/L", help="H/L of each test's slab")
     assemble.set_defaults(run=_map_assemble)
+    figures = steps.add_parser("figures", help="draw the map and one zone history per "
+                               "behaviour")
+    figures.add_argument("map", type=Path, help="map netCDF of 'slipwave map assemble'")
+    figures.add_argument("--figure", type=Path, required=True, help="map figure (PNG)")
+    figures.add_argument("--zones", type=Path, default=None,
+                         help="zone histories of one case per behaviour (PNG)")
+    figures.add_argument("--summary", type=Path, default=None,
+                         help="campaign summary CSV: tests placed on the map")
+    figures.add_argument("--test-ratio", type=_column_pair, nargs="*", default=[],
+                         metavar="TEST=H/L", help="H/L of each test's slab")
+    figures.set_defaults(run=_map_figures)
 
     bench = commands.add_parser(
         "bench", help="generate a virtual-bench campaign (CSVs, videos, truth)",

@@ -20,16 +20,30 @@ rule map_row:
 
 
 rule map:
-    """The map: map.nc, map.csv, the figure with the campaign's tests, one zone history per behaviour."""
+    """The map: map.nc (H/L x f: behaviour, succession, L, first events, T/N), map.csv, legend."""
     input:
-        rows=expand(
-            "results/map/rows/hl{height_ratio}.nc", height_ratio=MAP_HEIGHT_RATIOS
-        ),
-        summary="results/summary.csv",
+        expand("results/map/rows/hl{height_ratio}.nc", height_ratio=MAP_HEIGHT_RATIOS),
     output:
         netcdf="results/map/map.nc",
         csv="results/map/map.csv",
-        legend="results/map/legend.md",
+        legend=report(
+            "results/map/legend.md", caption="../report/legend.rst", category="Behaviour map"
+        ),
+    log:
+        "results/logs/map/map.log",
+    conda:
+        "../envs/slipwave.yaml"
+    shell:
+        "slipwave map assemble {input:q} -o {output.netcdf:q} --csv {output.csv:q} "
+        "--legend {output.legend:q} > {log:q} 2>&1"
+
+
+rule map_figures:
+    """The map figure with the campaign's tests, and one zone history per behaviour."""
+    input:
+        map="results/map/map.nc",
+        summary="results/summary.csv",
+    output:
         figure=report(
             "results/map/map.png", caption="../report/map.rst", category="Behaviour map"
         ),
@@ -39,12 +53,12 @@ rule map:
             category="Behaviour map",
         ),
     log:
-        "results/logs/map/map.log",
+        "results/logs/map/map_figures.log",
     params:
         tests=" ".join(height_ratio_pairs(campaign)),
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave map assemble {input.rows:q} -o {output.netcdf:q} --csv {output.csv:q} "
-        "--legend {output.legend:q} --figure {output.figure:q} --zones {output.zones:q} "
-        "--summary {input.summary:q} --test-ratio {params.tests} > {log:q} 2>&1"
+        "slipwave map figures {input.map:q} --figure {output.figure:q} "
+        "--zones {output.zones:q} --summary {input.summary:q} --test-ratio {params.tests} "
+        "> {log:q} 2>&1"

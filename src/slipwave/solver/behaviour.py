@@ -241,14 +241,22 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
     # sliding (at gross sliding every contact node slips: one zone, nothing to read).
     window = np.arange(normal_end, last)
     codes = node_conditions(ds["state"].values[window], ds["slip_direction"].values[window])
+    if not _approach_had_friction(ds):
+        # A frictionless approach leaves every node sliding freely: the tangential
+        # loading starts from a clean interface, friction engaging everywhere.
+        codes[0] = np.where(codes[0] == CONDITIONS.index("open"), codes[0],
+                            CONDITIONS.index("stick"))
     spacing = float(x[1] - x[0])
+    # A zone dates from when half the decisive size of it was there (a node or two):
+    # the same physical size on any mesh.
+    least = max(1, int(np.ceil(0.5 * min_size / spacing - 1e-9)))
     seen: set[int] = set()
     zones = []
     for step, zone, code, first, last_node, absorbed in follow_zones(codes, spacing, min_size):
         # A zone dates from when its condition appeared where it is (only its first row
         # needs it); the zones of the end of the normal loading date from there.
         onset = step if zone in seen or step == 0 else _onset(codes, step, code, first,
-                                                              last_node)
+                                                              last_node, least)
         seen.add(zone)
         zones.append(_Zone(int(window[step]), zone, code, float(x[first]), float(x[last_node]),
                            last_node - first, absorbed, int(window[onset])))
@@ -327,7 +335,8 @@ def _events(zones: list[_Zone], normal_end: int, T: np.ndarray, N: np.ndarray,
         if first.code == _OPEN and not at_start:
             where = _where(first, ends[normal_end])
             events.append({**stamp(first.onset), "event": "opening", "where": where,
-                           "x": first.centre, "phrase": f"opening {where}"})
+                           "x": first.centre, "phrase": f"opening {where}",
+                           "established": _established(rows, min_sweep)})
         elif first.code == _SLIP_FORWARD and not at_start:
             events.append({**stamp(first.onset), "event": "unloading slip",
                            "where": _where(first, ends[first.step]), "x": first.centre})
@@ -350,6 +359,7 @@ def _events(zones: list[_Zone], normal_end: int, T: np.ndarray, N: np.ndarray,
                            "origin": origin, "x": first.centre, "sweep": sweep,
                            "swept_left": leftward, "swept_right": rightward,
                            "extent": round(extent, 6),
+                           "established": _established(rows, min_sweep),
                            "phrase": f"{name} sweeps {sweep}" if decides else None})
             if ended is not None:
                 events.append({**stamp(ended), "event": "merge", "x": rows[-1].centre,
@@ -359,7 +369,12 @@ def _events(zones: list[_Zone], normal_end: int, T: np.ndarray, N: np.ndarray,
                                "origin": origin, "x": rows[-1].centre,
                                "phrase": f"{name} sticks again" if decides else None})
     rank = {"opening": 0, "unloading slip": 1, "slip": 2, "merge": 3, "re-stick": 4}
-    events.sort(key=lambda e: (e["step"], rank[e["event"]], e.get("x", 0.0)))
+    # Ordered by when each zone was established (reached the decisive extent): their
+    # very first nodes, at a corner, come in an order the mesh decides.
+    events.sort(key=lambda e: (e.get("established", e["step"]), rank[e["event"]],
+                               e.get("x", 0.0)))
+    for event in events:
+        event.pop("established", None)
     unique: list[dict[str, Any]] = []  # a merge of several zones in one step is one event
     for event in events:
         if event["event"] == "merge" and unique and unique[-1]["event"] == "merge" \
@@ -370,16 +385,26 @@ def _events(zones: list[_Zone], normal_end: int, T: np.ndarray, N: np.ndarray,
     return unique
 
 
-def _onset(codes: np.ndarray, step: int, code: int, first: int, last: int) -> int:
-    """The step from which a zone's condition was present where the zone is, at any size.
+def _established(rows: list[_Zone], extent: float) -> int:
+    """The step a zone first spanned ``extent`` (its last step if it never did)."""
+    return next((r.step for r in rows if r.right - r.left >= extent), rows[-1].step)
 
-    A zone counts once it is ``min_size`` long, but it started when its condition first
-    appeared there: that start orders it among the events.
+
+def _onset(codes: np.ndarray, step: int, code: int, first: int, last: int, least: int) -> int:
+    """The step from which a zone's condition held ``least`` nodes where the zone is.
+
+    A zone counts once it is ``min_size`` long, but it started earlier, when its
+    condition first appeared there: that start orders it among the events.
     """
     onset = step
-    while onset > 1 and (codes[onset - 1, first : last + 1] == code).any():
+    while onset > 1 and (codes[onset - 1, first : last + 1] == code).sum() >= least:
         onset -= 1
     return onset
+
+
+def _approach_had_friction(ds: xr.Dataset) -> bool:
+    value = ds.attrs.get("path_normal_friction", True)
+    return str(value).lower() not in ("false", "0")
 
 
 def _closed_ends(group: list[_Zone]) -> tuple[float, float]:
