@@ -350,9 +350,13 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
     grid = whole["behaviour"].values
     ids = whole["behaviour_id"].values
     names = [str(n) for n in whole["behaviour_name"].values]
-    palette = [*sns.color_palette("tab20", 20), *sns.color_palette("tab20b", 20),
-               *sns.color_palette("tab20c", 20)]
-    colours = ListedColormap([palette[k % len(palette)] for k in range(ids.size)])
+    # One hue per family, shades within it: ZD blues, ZG oranges, the others greens.
+    families = {"ZD": "Blues", "ZG": "Oranges", "": "Greens"}
+    members = {family: [n for n in names if _family(n) == family] for family in families}
+    shades = {family: sns.color_palette(families[family], max(3, len(group)) + 2)[::-1]
+              for family, group in members.items()}
+    colours = ListedColormap([shades[_family(n)][1 + members[_family(n)].index(n)]
+                              for n in names])
 
     def edges(values: np.ndarray) -> np.ndarray:
         if values.size == 1:
@@ -409,3 +413,7 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
         y -= step * (line.count("\n") + 1)
     return fig
 
+
+
+def _family(name: str) -> str:
+    return name[:2] if name.startswith(("ZD", "ZG")) else ""
