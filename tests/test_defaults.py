@@ -70,3 +70,27 @@ def test_library_signatures_take_the_defaults():
                                                          defaults.TANGENTIAL_STEP_N)
     assert _cli_default("simulate", "height") == defaults.SLAB_HEIGHT_MM
     assert _cli_default("simulate", "normal_load") == defaults.NORMAL_LOAD_N
+
+
+def test_map_defaults_agree():
+    """The map's config section, `slipwave map row` and slipwave.map take one default each."""
+    from slipwave.map import PAPER_HEIGHT_RATIOS, map_row
+    from slipwave.solver.behaviour import describe_behaviour
+
+    schema = SCHEMA["properties"]["map"]["properties"]
+    commands = next(a for a in build_parser()._actions if a.dest == "command")
+    steps = next(a for a in commands.choices["map"]._actions  # type: ignore[index]
+                 if a.dest == "map_command")
+    row = {a.dest: a.default for a in steps.choices["row"]._actions}  # type: ignore[index]
+    assert schema["elements"]["default"] == row["elements"] == defaults.CONTACT_ELEMENTS
+    assert schema["normal_control"]["default"] == row["normal_control"] == \
+        defaults.MAP_NORMAL_CONTROL
+    assert schema["normal_friction"]["default"] is defaults.MAP_NORMAL_FRICTION is False
+    assert row["normal_friction"] == "off"
+    assert schema["min_zone_mm"]["default"] == row["min_zone"] == defaults.MIN_ZONE_MM
+    assert schema["frictions"]["default"] == row["frictions"] == [0.10, 1.40, 0.01]
+    assert tuple(schema["height_ratios"]["default"]) == PAPER_HEIGHT_RATIOS
+    assert inspect.signature(map_row).parameters["min_size"].default == defaults.MIN_ZONE_MM
+    assert inspect.signature(describe_behaviour).parameters["min_size"].default == \
+        defaults.MIN_ZONE_MM
+    assert inspect.signature(map_row).parameters["elements"].default == defaults.CONTACT_ELEMENTS

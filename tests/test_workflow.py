@@ -25,6 +25,12 @@ ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
 pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 
 
+# The map runs on a small grid here (the paper's 1572 cases are benchmarked in
+# benchmarks/bench_map.py): two H/L, four f, 40 elements.
+SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n"
+             "  elements: 40\n")
+
+
 @pytest.fixture
 def workdir(tmp_path: Path) -> Path:
     for name in ["Snakefile", "workflow", "config", "profiles", "raw_data"]:
@@ -33,6 +39,8 @@ def workdir(tmp_path: Path) -> Path:
             shutil.copytree(source, tmp_path / name)
         else:
             shutil.copy(source, tmp_path / name)
+    with open(tmp_path / "config/config.yaml", "a") as config:
+        config.write(SMALL_MAP)
     return tmp_path
 
 
@@ -76,6 +84,18 @@ def test_full_run_on_default_campaign(workdir):
         assert (fused["source"] != "video").sum() == len(events)
         clock = json.loads((workdir / f"results/{test_id}/clock.json").read_text())
         assert clock["pairs"] >= 30
+    # the behaviour map: one row job per H/L, the map, its figures with the tests on them
+    whole = read_dataset(workdir / "results/map/map.nc")
+    assert whole["height_ratio"].values.tolist() == [0.25, 0.5]
+    assert whole["friction"].values.tolist() == [0.4, 0.6, 0.8, 1.0]
+    assert set(whole["end"].values.ravel()) == {"gross sliding"}
+    assert len(pd.read_csv(workdir / "results/map/map.csv")) == 8
+    for name in ("map.png", "zones.png", "legend.md"):
+        assert (workdir / "results/map" / name).stat().st_size > 100
+    for log in ("hl0.25", "hl0.5", "map", "map_figures"):
+        assert (workdir / f"results/logs/map/{log}.log").exists()
+    assert "3 tests placed" in (workdir / "results/logs/map/map_figures.log").read_text()
+    assert "4/4" in (workdir / "results/logs/map/hl0.5.log").read_text()  # progress
 
 
 def test_column_map_from_config(workdir):

@@ -256,9 +256,11 @@ def _map_figures(args: argparse.Namespace) -> None:
     with atomic_output(args.figure) as temporary:
         plot_map(whole, tests).savefig(temporary, dpi=130, format="png")
     if args.zones is not None:
-        cases = [(f"{case.name}: H/L {case.height_ratio:g}, f {case.friction:.2f}",
-                  simulate_case(whole, case.height_ratio, case.friction, store=DiskCache()))
-                 for case in representative_cases(whole).itertuples()]
+        cases = [(f"{name}: H/L {hl:g}, f {f:.2f}",
+                  simulate_case(whole, float(hl), float(f), store=DiskCache()))
+                 for name, hl, f in representative_cases(whole)[["name", "height_ratio",
+                                                                "friction"]].itertuples(
+                                                                    index=False)]
         with atomic_output(args.zones) as temporary:
             plot_zone_histories(cases).savefig(temporary, dpi=130, format="png")
     placed = 0 if tests is None else len(tests)

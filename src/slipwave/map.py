@@ -35,7 +35,7 @@ PAPER_HEIGHT_RATIOS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2, 1.
 
 def map_row(
     height_ratio: float,
-    frictions: Sequence[float],
+    frictions: Sequence[float] | np.ndarray,
     *,
     elements: int = CONTACT_ELEMENTS,
     length: float = CONTACT_LENGTH_MM,
@@ -101,16 +101,17 @@ def map_row(
             progress(k + 1, len(frictions))
     table = pd.DataFrame(rows)
     data: dict[str, Any] = {}
-    for name, (attrs, kind) in _VARIABLES.items():
+    for name, (variable_attrs, kind) in _VARIABLES.items():
         values = table[name].to_numpy()
-        data[name] = (("height_ratio", "friction"), values.astype(kind)[None, :], attrs)
+        data[name] = (("height_ratio", "friction"), values.astype(kind)[None, :],
+                      variable_attrs)
     coords = {
         "height_ratio": ("height_ratio", [float(height_ratio)],
                          {"units": "1", "long_name": "slab height over contact length H/L"}),
         "friction": ("friction", np.asarray(frictions, dtype=float),
                      {"units": "1", "long_name": "friction coefficient (fs = fd)"}),
     }
-    attrs = {
+    attrs: dict[str, str | int | float] = {
         "title": "slipwave behaviour map",
         "Conventions": CONVENTIONS,
         "source": f"slipwave {__version__} slipwave.map.map_row",
