@@ -21,7 +21,13 @@ import pandas as pd
 import xarray as xr
 
 from slipwave import __version__
-from slipwave.defaults import CONTACT_ELEMENTS, CONTACT_LENGTH_MM, CONVENTIONS
+from slipwave.defaults import (
+    CONTACT_ELEMENTS,
+    CONTACT_LENGTH_MM,
+    CONVENTIONS,
+    MAP_NORMAL_CONTROL,
+    MAP_NORMAL_FRICTION,
+)
 from slipwave.errors import SlipwaveError
 from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
 from slipwave.solver.behaviour import MIN_ZONE_MM, ZD, ZG, describe_behaviour
@@ -57,7 +63,8 @@ def map_row(
     length
         L, mm.
     path
-        The load path; by default the paper's: 76 N held constant, 2 N steps.
+        The load path; by default the map's: 76 N held constant (the paper's
+        setting), a frictionless approach, 2 N steps.
     min_size
         Shortest zone that decides anything, mm.
     store
@@ -83,7 +90,8 @@ def map_row(
     'opening right -> slip zone from right edge sweeps right-to-left -> gross sliding'
 
     """
-    path = path or LoadPath(normal_control="force")
+    path = path or LoadPath(normal_control=MAP_NORMAL_CONTROL,  # type: ignore[arg-type]
+                            normal_friction=MAP_NORMAL_FRICTION)
     slab = Slab(length=length, height=height_ratio * length, elements=elements)
     started = time.perf_counter()
     condensed = condense(slab, store=store)

@@ -6,8 +6,8 @@ by increment along the bench's load path.
 
 >>> from slipwave.solver import Slab, Coulomb, LoadPath, simulate, describe_behaviour
 >>> ds = simulate(Slab(elements=40), Coulomb(fs=1.0), LoadPath())
->>> describe_behaviour(ds).sweep
-'right_to_left'
+>>> describe_behaviour(ds).sequence[0]
+'opening right'
 """
 
 from slipwave.solver.behaviour import Behaviour, describe_behaviour
