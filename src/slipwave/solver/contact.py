@@ -119,8 +119,6 @@ class Body:
         self.cy = diagonal[self.iy]
         self.sum_x = self.K[self.ix].sum(axis=0)  # sum Q = sum_x @ u
         self.sum_y = self.K[self.iy].sum(axis=0)
-        self.column_sum_x = self.K[:, self.ix].sum(axis=1)  # K @ (1 on every x dof)
-        self.column_sum_y = self.K[:, self.iy].sum(axis=1)
         # Compliance, for the flexibility form; None when the body alone has a
         # rigid mode (then only the stiffness form is used).
         self.C = compliance
@@ -444,14 +442,6 @@ def _block(matrix: np.ndarray, rows: np.ndarray, columns: np.ndarray) -> np.ndar
     return matrix.take(rows, axis=0).take(columns, axis=1)
 
 
-def _columns_sum(K: np.ndarray, chosen: np.ndarray, others: np.ndarray,
-                 total: np.ndarray) -> np.ndarray:
-    """``K[:, chosen].sum(axis=1)``, from the total less the others when they are fewer."""
-    if others.size < chosen.size:
-        return total - K[:, others].sum(axis=1)
-    return K[:, chosen].sum(axis=1)
-
-
 class _Plan:
     """The factorised linear problem of one zone state (either form)."""
 
@@ -491,13 +481,17 @@ class _Plan:
     # Stiffness form: unknown displacements of open (x, y) and slipping (x) nodes.
     def _stiffness_matrix(self) -> np.ndarray:
         body, ix, iy = self.body, self.body.ix, self.body.iy
-        K = body.K
         opened = ~self.contact
         self.unknown = np.concatenate([ix[self.slip | opened], iy[opened]])
         self.rows = np.concatenate([ix[opened], iy[opened], ix[self.slip]])
         self.first_slip_row = self.rows.size - int(self.slip.sum())
-        M = _block(K, self.rows, self.unknown)
-        M[self.first_slip_row :] -= self.mu_slip[:, None] * _block(K, iy[self.slip], self.unknown)
+        # The only rows of K the equations read: their own and the slipping nodes'
+        # normal rows (Q - mu P). Gathered once, they serve the matrix, the flat's
+        # columns and every right-hand side of this state.
+        self.k_rows = body.K.take(np.concatenate([self.rows, self.slip_y]), axis=0)
+        M = self.k_rows.take(self.unknown, axis=1)
+        M = M[: self.rows.size] - np.pad(self.mu_slip[:, None] * M[self.rows.size :],
+                                         ((self.first_slip_row, 0), (0, 0)))
         extra = []
         if self.T_given:
             extra.append(body.sum_x[self.unknown])
@@ -506,12 +500,9 @@ class _Plan:
         M = np.vstack([M, *extra]) if extra else M
         # What the flat's motion does to the equations: a column where it is
         # unknown, a right-hand side term where it is given.
-        # K @ along: the columns of the stuck x (contact y) dofs summed, from the sum over
-        # all x (y) columns less the few that are not (cheaper than a product).
-        flat_x = _columns_sum(K, ix[self.stick], ix[~self.stick], body.column_sum_x)
-        flat_y = _columns_sum(K, iy[self.contact], iy[~self.contact], body.column_sum_y)
-        self.flat_x = self._equations(flat_x)
-        self.flat_y = self._equations(flat_y)
+        along = np.stack([self.along_x, self.along_y], axis=1)
+        flat_x, flat_y = self._equations_of(along).T
+        self.flat_x, self.flat_y = flat_x.copy(), flat_y.copy()
         if self.T_given:
             self.flat_x[self.rows.size] += self.machine  # the machine spring on the flat
         columns = [M]
@@ -521,18 +512,21 @@ class _Plan:
             columns.append(self.flat_y[:, None])
         return np.hstack(columns)
 
-    def _equations(self, force: np.ndarray) -> np.ndarray:
-        """The equations' left-hand sides for a displacement whose forces are ``force``."""
+    def _equations_of(self, u: np.ndarray) -> np.ndarray:
+        """The equations' left-hand sides for the displacement(s) ``u`` (columns)."""
         body = self.body
-        rows = force[self.rows]
-        rows[self.first_slip_row :] -= self.mu_slip * force[self.slip_y]
-        n = body.n
+        force = self.k_rows @ u  # K @ u at the rows the equations read
+        rows = force[: self.rows.size]
+        rows[self.first_slip_row :] -= (self.mu_slip * force[self.rows.size :].T).T
         extra = []
         if self.T_given:
-            extra.append(force[:n].sum())
+            extra.append(body.sum_x @ u)
         if self.N_given:
-            extra.append(force[n:].sum())
-        return np.concatenate([rows, extra]) if extra else rows
+            extra.append(body.sum_y @ u)
+        if not extra:
+            return rows
+        return np.concatenate([rows, np.atleast_1d(np.array(extra))
+                               if u.ndim == 1 else np.array(extra)])
 
     # Compliance form: unknown forces Q, P of stuck nodes and P of slipping ones.
     def _compliance_matrix(self) -> np.ndarray:
@@ -605,7 +599,7 @@ class _Plan:
         base[self.contact_y] = -body.g0[self.contact]
         b = np.zeros(self.size) if self.size else np.zeros(0)
         b[len(b) - len(totals):] = totals
-        b -= self._equations(body.K @ base)
+        b -= self._equations_of(base)
         if control.dx is not None:
             b -= control.dx * self.flat_x
         if control.dy is not None:
