@@ -158,3 +158,171 @@ def test_held_normal_displacement_slides_or_jams(paper_case):
     held = paper_case(1.4)
     assert held.attrs["gross_sliding"] == "reached"
     assert float(held["T"][-1] / held["N"][-1]) == pytest.approx(1.4, rel=1e-6)
+
+
+# One case of each of the 24 behaviours of the default map (160 elements, N held,
+# frictionless approach): the case deepest inside its region, with its succession.
+MAP_BEHAVIOURS = [
+    (0.8, 0.72, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'gross sliding',
+    )),
+    (0.6, 1.18, 'ZD', (
+        'opening right',
+        'slip zone from right edge sweeps right-to-left',
+        'gross sliding',
+    )),
+    (0.8, 0.15, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone from left edge sweeps left-to-right',
+        'gross sliding',
+    )),
+    (0.2, 1.38, 'ZG', (
+        'opening right',
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone inside sweeps left-to-right',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (0.1, 0.7, 'ZG', (
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone inside sweeps left-to-right',
+        'opening right',
+        'gross sliding',
+    )),
+    (0.3, 1.05, 'ZD', (
+        'opening right',
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone inside sweeps in place',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (0.2, 0.29, None, (
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone from left edge sweeps left-to-right',
+        'opening right',
+        'gross sliding',
+    )),
+    (0.1, 0.18, None, (
+        'slip zone from left edge sweeps left-to-right',
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'gross sliding',
+    )),
+    (1.0, 0.24, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone from left edge sweeps left-to-right',
+        'gross sliding',
+    )),
+    (0.1, 1.19, 'ZG', (
+        'slip zone inside sweeps left-to-right',
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (0.7, 0.21, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'gross sliding',
+    )),
+    (0.2, 0.55, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone inside sweeps left-to-right',
+        'gross sliding',
+    )),
+    (0.1, 0.87, 'ZG', (
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone inside sweeps left-to-right',
+        'opening right',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (0.2, 0.66, 'ZG', (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone inside sweeps left-to-right',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (0.1, 1.32, 'ZG', (
+        'slip zone inside sweeps left-to-right',
+        'slip zone from right edge sweeps right-to-left',
+        'slip zones merge',
+        'opening right',
+        'gross sliding',
+    )),
+    (0.3, 0.62, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone inside sweeps in place',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (0.1, 1.05, 'ZG', (
+        'slip zone inside sweeps left-to-right',
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'gross sliding',
+    )),
+    (0.1, 1.39, 'ZG', (
+        'slip zone inside sweeps left-to-right',
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone from right edge sticks again',
+        'gross sliding',
+    )),
+    (0.2, 0.73, 'ZG', (
+        'opening right',
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone inside sweeps left-to-right',
+        'gross sliding',
+    )),
+    (0.2, 0.39, 'ZD', (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone inside sweeps in place',
+        'gross sliding',
+    )),
+    (0.2, 0.35, None, (
+        'slip zone from right edge sweeps right-to-left',
+        'opening right',
+        'slip zone inside sweeps both ways',
+        'gross sliding',
+    )),
+    (0.3, 1.35, 'ZD', (
+        'opening right',
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone inside sweeps both ways',
+        'slip zones merge',
+        'gross sliding',
+    )),
+    (1.5, 0.1, 'ZD', (
+        'slip zone from left edge sweeps left-to-right',
+        'slip zone from right edge sweeps right-to-left',
+        'gross sliding',
+    )),
+    (0.2, 0.32, 'ZG', (
+        'slip zone from right edge sweeps right-to-left',
+        'slip zone from left edge sweeps left-to-right',
+        'slip zone inside sweeps left-to-right',
+        'opening right',
+        'slip zones merge',
+        'gross sliding',
+    )),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("height_ratio", "fs", "paper", "sequence"), MAP_BEHAVIOURS,
+                         ids=[f"hl{c[0]:g}-f{c[1]:.2f}" for c in MAP_BEHAVIOURS])
+def test_each_behaviour_of_the_map_on_a_case_that_shows_it(height_ratio, fs, paper, sequence):
+    slab = Slab(height=80.0 * height_ratio)
+    ds = simulate(slab, Coulomb(fs=fs), LoadPath(normal_control="force", normal_friction=False),
+                  condensed=condense(slab))
+    behaviour = describe_behaviour(ds)
+    assert behaviour.sequence == sequence
+    assert behaviour.paper_name == paper
+    assert behaviour.end == "gross sliding"
