@@ -1,0 +1,255 @@
+"""A test's own configuration, read from its files: what its simulation needs.
+
+The slab's geometry and material come from the recording's header (the card's
+metadata lines, ``length_mm``, ``height_mm``...) or from the campaign table's columns
+of the same names, the table winning; the normal load, the drive speed and the
+machine's stiffness are measured on the recording itself (:func:`normal_load_plateau`,
+:func:`drive_speed`, :func:`machine_stiffness`). Every value keeps where it came from.
+What can be neither read nor measured is an error that names the test and the column
+to add to the campaign table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from slipwave.errors import SlipwaveError
+
+GEOMETRY = {
+    "length_mm": "contact length L, mm",
+    "height_mm": "slab height H, mm",
+    "width_mm": "slab width w, mm",
+    "youngs_modulus_mpa": "Young's modulus E of the slab, MPa",
+    "poisson_ratio": "Poisson's ratio of the slab",
+}
+"""Header keys and campaign-table columns of the slab's geometry and material."""
+
+EDGE_REFERENCES = ("frame", "flat")
+"""What the edge sensors read against: the loading frame (elastic deflection only) or
+the flat (the slip accumulates in them)."""
+
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A value and where it came from.
+
+    Attributes
+    ----------
+    value
+        The value, in the project's units.
+    source
+        ``"campaign table"``, ``"recording header"`` or how it was measured.
+
+    """
+
+    value: float
+    source: str
+
+
+@dataclass(frozen=True)
+class TestSetup:
+    """Everything a test's simulation takes from the test's files.
+
+    Attributes
+    ----------
+    test_id
+        The test.
+    settings
+        ``length_mm``, ``height_mm``, ``width_mm``, ``youngs_modulus_mpa``,
+        ``poisson_ratio``, ``normal_load_n``, ``speed_mm_s``, ``machine_stiffness_n_mm``,
+        ``duration_s``, each a :class:`Setting`.
+    edge_reference
+        What the edge sensors read against (:data:`EDGE_REFERENCES`), from the
+        campaign table's ``edge_reference`` column.
+
+    """
+
+    __test__ = False  # not a pytest class
+
+    test_id: str
+    settings: Mapping[str, Setting]
+    edge_reference: str
+
+    def __getitem__(self, key: str) -> float:
+        return self.settings[key].value
+
+    def to_dict(self) -> dict[str, Any]:
+        """The setup in plain types, each value with its source.
+
+        Returns
+        -------
+        dict
+            ``test_id``, ``edge_reference`` and ``{key: {"value", "source"}}``.
+
+        """
+        return {"test_id": self.test_id, "edge_reference": self.edge_reference,
+                **{key: {"value": round(s.value, 6), "source": s.source}
+                   for key, s in self.settings.items()}}
+
+
+def _tangential_window(recording: xr.Dataset) -> np.ndarray:
+    """Samples after the normal loading: from where T first exceeds 5 % of its range."""
+    T = recording["T"].values
+    low, high = np.nanpercentile(T, [1, 99])
+    rising = T - low > 0.05 * (high - low)
+    start = int(np.argmax(rising))
+    return np.arange(start, T.size)
+
+
+def normal_load_plateau(recording: xr.Dataset) -> float:
+    """The normal load reached by the normal loading, N (compressive magnitude).
+
+    The median of |N| over the second before the tangential loading starts (T
+    first above 5 % of its range).
+
+    Parameters
+    ----------
+    recording
+        From :func:`slipwave.io.read_acquisition`, with an N channel.
+
+    Returns
+    -------
+    float
+        The plateau, N.
+
+    """
+    if "N" not in recording:
+        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: no N channel to "
+                            "measure the normal load on; add the column normal_load_n")
+    time = recording["time"].values
+    start = int(_tangential_window(recording)[0])
+    before = (time >= time[start] - 1.0) & (time < time[start])
+    if not before.any():
+        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: the tangential "
+                            "loading starts with the recording: no normal-load plateau")
+    return float(np.nanmedian(np.abs(recording["N"].values[before])))
+
+
+def drive(recording: xr.Dataset) -> tuple[float, float]:
+    """The drive's speed (mm/s) and the machine's stiffness (N/mm), from T and DT.
+
+    The actuator at X = V t + X0 drives the flat through the machine's spring, so at
+    every sample, stick or slip, T = k (X - DT): DT = V t - T / k + X0. A least-squares
+    fit of DT on t and T over the tangential loading gives V and k at once (a slope of
+    DT alone would miss V by the spring's growing stretch as T rises).
+
+    Parameters
+    ----------
+    recording
+        With T and DT channels.
+
+    Returns
+    -------
+    tuple of float
+        (speed, stiffness).
+
+    Raises
+    ------
+    SlipwaveError
+        Without a DT channel, or when T does not load the spring (no stiffness).
+
+    """
+    test_id = recording.attrs.get("test_id", "?")
+    if "DT" not in recording:
+        raise SlipwaveError(f"test {test_id!r}: no DT channel to measure the drive on; add "
+                            "the columns speed_mm_s and machine_stiffness_n_mm")
+    window = _tangential_window(recording)
+    time = recording["time"].values[window]
+    T = recording["T"].values[window]
+    travel = recording["DT"].values[window]
+    good = np.isfinite(T) & np.isfinite(travel)
+    design = np.column_stack([time[good], T[good], np.ones(int(good.sum()))])
+    (speed, compliance, _), rss, *_ = np.linalg.lstsq(design, travel[good], rcond=None)
+    # the compliance's standard error: a spring must show, at three of them
+    variance = float(rss[0]) / max(1, design.shape[0] - 3) if np.size(rss) else 0.0
+    error = float(np.sqrt(variance * np.linalg.inv(design.T @ design)[1, 1]))
+    if not -compliance > 3.0 * error:
+        raise SlipwaveError(f"test {test_id!r}: DT does not give way as T rises (no machine "
+                            "spring to measure); add the column machine_stiffness_n_mm")
+    return float(speed), float(-1.0 / compliance)
+
+
+def read_test_setup(recording: xr.Dataset, cells: Mapping[str, Any]) -> TestSetup:
+    """A test's configuration: header and campaign table, then what is measured.
+
+    Parameters
+    ----------
+    recording
+        The test's recording (:func:`slipwave.io.read_acquisition`).
+    cells
+        The test's row of the campaign table (column -> cell; empty cells ignored).
+        Columns ``length_mm``, ``height_mm``, ``width_mm``, ``youngs_modulus_mpa``,
+        ``poisson_ratio``, ``normal_load_n``, ``speed_mm_s``,
+        ``machine_stiffness_n_mm`` override the header and the measurements;
+        ``edge_reference`` is ``frame`` or ``flat``.
+
+    Returns
+    -------
+    TestSetup
+        Every setting with its source.
+
+    Raises
+    ------
+    SlipwaveError
+        Naming the test and the column to add, for what is neither in the files nor
+        measurable; or a cell that is not a positive number.
+
+    """
+    test_id = str(cells.get("test_id") or recording.attrs.get("test_id", "?"))
+
+    def given(key: str) -> Setting | None:
+        cell = str(cells.get(key, "") or "").strip()
+        if cell:
+            try:
+                value = float(cell)
+            except ValueError:
+                value = float("nan")
+            if not (np.isfinite(value) and value > 0):
+                raise SlipwaveError(f"test {test_id!r}: campaign-table column {key} is "
+                                    f"{cell!r}, not a positive number")
+            return Setting(value, "campaign table")
+        if key in recording.attrs:
+            value = float(recording.attrs[key])
+            if np.isfinite(value) and value > 0:
+                return Setting(value, "recording header")
+        return None
+
+    settings: dict[str, Setting] = {}
+    for key, meaning in GEOMETRY.items():
+        found = given(key)
+        if found is None:
+            raise SlipwaveError(f"test {test_id!r}: the {meaning} is neither in the "
+                                f"recording's header nor in the campaign table: add the "
+                                f"column {key} to the campaign table")
+        settings[key] = found
+    normal = given("normal_load_n")
+    if normal is None or normal.source == "recording header":
+        # the load the test reached, not the header's nominal one
+        normal = Setting(normal_load_plateau(recording),
+                         "measured: median |N| over the second before T rises")
+    settings["normal_load_n"] = normal
+    # The drive's real speed, not the header's nominal one, and the machine's spring.
+    speed, stiffness = given("speed_mm_s"), given("machine_stiffness_n_mm")
+    if (speed is None or speed.source == "recording header" or stiffness is None):
+        measured = drive(recording)
+        how = "measured: least squares of DT on t and T over the tangential loading"
+        if speed is None or speed.source == "recording header":
+            speed = Setting(measured[0], how)
+        if stiffness is None:
+            stiffness = Setting(measured[1], how)
+    settings["speed_mm_s"] = speed
+    settings["machine_stiffness_n_mm"] = stiffness
+    time = recording["time"].values
+    settings["duration_s"] = Setting(float(time[-1] - time[0]), "recording length")
+    reference = str(cells.get("edge_reference", "") or "").strip()
+    if reference not in EDGE_REFERENCES:
+        what = f"is {reference!r}" if reference else "is not given"
+        raise SlipwaveError(f"test {test_id!r}: what the edge sensors read against {what}: "
+                            "set the campaign-table column edge_reference to frame or flat")
+    return TestSetup(test_id, settings, reference)

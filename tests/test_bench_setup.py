@@ -1,0 +1,73 @@
+"""A test's configuration from its own files (issue 15, item 1)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from slipwave.bench.setup import drive, normal_load_plateau, read_test_setup
+from slipwave.errors import SlipwaveError
+from slipwave.io import read_acquisition
+
+RAW = Path(__file__).parents[1] / "raw_data" / "bench"
+MATERIAL = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
+
+
+@pytest.fixture(scope="module")
+def hl075():
+    return read_acquisition(RAW / "hl075.csv")
+
+
+def test_drive_and_normal_load_are_measured_on_the_recording(hl075):
+    # the virtual bench's truth (raw_data/bench/campaign.yaml): 0.048 mm/s, 40 N/mm, 85 N
+    speed, stiffness = drive(hl075)
+    assert speed == pytest.approx(0.048, rel=0.01)
+    assert stiffness == pytest.approx(40.0, rel=0.02)
+    assert normal_load_plateau(hl075) == pytest.approx(85.0, rel=0.01)
+
+
+def test_setup_reads_the_header_then_the_table_and_says_where_from(hl075):
+    setup = read_test_setup(hl075, {"test_id": "hl075", **MATERIAL})
+    assert setup["height_mm"] == 60.0 and setup.settings["height_mm"].source == \
+        "recording header"
+    assert setup.settings["youngs_modulus_mpa"].source == "campaign table"
+    assert setup.settings["speed_mm_s"].source.startswith("measured")
+    assert setup.settings["normal_load_n"].source.startswith("measured")
+    assert setup.edge_reference == "frame"
+    overridden = read_test_setup(hl075, {"test_id": "hl075", **MATERIAL, "height_mm": "59.5",
+                                    "machine_stiffness_n_mm": "38"})
+    assert overridden["height_mm"] == 59.5
+    assert overridden.settings["machine_stiffness_n_mm"].source == "campaign table"
+    data = overridden.to_dict()
+    assert data["height_mm"] == {"value": 59.5, "source": "campaign table"}
+
+
+def test_what_cannot_be_read_or_measured_names_the_column_to_add(hl075):
+    bare = hl075.copy()
+    bare.attrs = {k: v for k, v in hl075.attrs.items() if k != "height_mm"}
+    with pytest.raises(SlipwaveError, match=r"test 'hl075': the slab height H, mm .* add the "
+                                            r"column height_mm"):
+        read_test_setup(bare, {"test_id": "hl075", **MATERIAL})
+    with pytest.raises(SlipwaveError, match="column youngs_modulus_mpa"):
+        read_test_setup(hl075, {"test_id": "hl075", "edge_reference": "flat"})
+    with pytest.raises(SlipwaveError, match="edge_reference to frame or flat"):
+        read_test_setup(hl075, {"test_id": "hl075", **MATERIAL, "edge_reference": ""})
+    with pytest.raises(SlipwaveError, match="column width_mm is 'ten', not a positive number"):
+        read_test_setup(hl075, {"test_id": "hl075", **MATERIAL, "width_mm": "ten"})
+    without_dt = hl075.drop_vars("DT")
+    with pytest.raises(SlipwaveError, match="speed_mm_s and machine_stiffness_n_mm"):
+        read_test_setup(without_dt, {"test_id": "hl075", **MATERIAL})
+    given = read_test_setup(without_dt, {"test_id": "hl075", **MATERIAL, "speed_mm_s": "0.05",
+                                    "machine_stiffness_n_mm": "40"})
+    assert given["speed_mm_s"] == 0.05
+
+
+def test_a_spring_that_does_not_give_way_is_refused(hl075):
+    rigid = hl075.copy()
+    rigid["DT"] = ("time", 0.048 * rigid["time"].values + np.random.default_rng(0).normal(
+        0, 1e-4, rigid.sizes["time"]))
+    rigid["T"] = ("time", -rigid["T"].values)  # DT no longer gives way as T rises
+    with pytest.raises(SlipwaveError, match="machine_stiffness_n_mm"):
+        drive(rigid)
