@@ -45,7 +45,7 @@ from slipwave.defaults import (
 from slipwave.errors import SlipwaveError
 from slipwave.io import atomic_output, write_acquisition
 from slipwave.resources import require_memory
-from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, SlipWeakening, condense, simulate
 from slipwave.solver.slab import condensation_memory
 from slipwave.validation import check, load_schema, read_yaml
 
@@ -61,11 +61,12 @@ class BenchTest:
 
     The interface follows Coulomb's law with a static coefficient that grows
     from ``fs`` to ``fs_final`` over the first ``runin_slips`` gross slips
-    (run-in) and a dynamic one ``fd``. Waves whose T drop is below
-    ``min_event_drop`` (micro-slips at the edge of the contact) are listed in
-    the truth as not visible. ``edge_convention`` is how the card's edge sensors
-    read: both along +x, or each its own edge's outward displacement (the
-    paper's bench: the left sensor's sign is turned).
+    (run-in) and a dynamic one ``fd``; with ``dc`` (mm), linear slip-weakening
+    instead: a slipping node's coefficient falls from fs to fd over a slip Dc.
+    Waves whose T drop is below ``min_event_drop`` (micro-slips at the edge of
+    the contact) are listed in the truth as not visible. ``edge_convention`` is
+    how the card's edge sensors read: both along +x, or each its own edge's
+    outward displacement (the paper's bench: the left sensor's sign is turned).
     """
 
     test_id: str
@@ -79,6 +80,7 @@ class BenchTest:
     fd: float = 0.6
     fs_final: float | None = 1.3
     runin_slips: int = 4
+    dc: float | None = None
     normal_load: float = 85.0
     speed: float = 0.048
     duration: float = 280.0
@@ -118,10 +120,14 @@ class BenchTest:
         Returns
         -------
         Coulomb
-            Coulomb's law with run-in.
+            Coulomb's law with run-in, or linear slip-weakening (:class:`SlipWeakening`)
+            when ``dc`` is set.
 
         """
         runin = self.runin_slips if self.fs_final is not None else 0
+        if self.dc is not None:
+            return SlipWeakening(fs=self.fs, fd=self.fd, fs_final=self.fs_final,
+                                 runin_slips=runin, dc=self.dc)
         return Coulomb(fs=self.fs, fd=self.fd, fs_final=self.fs_final, runin_slips=runin)
 
     def load_path(self) -> LoadPath:

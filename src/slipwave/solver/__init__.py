@@ -12,7 +12,7 @@ by increment along the bench's load path.
 
 from slipwave.solver.behaviour import Behaviour, describe_behaviour
 from slipwave.solver.contact import Body, Control
-from slipwave.solver.simulate import Coulomb, LoadPath, simulate
+from slipwave.solver.simulate import Coulomb, LoadPath, SlipWeakening, simulate
 from slipwave.solver.slab import Condensed, Slab, condense
 
 __all__ = [
@@ -23,6 +23,7 @@ __all__ = [
     "Coulomb",
     "LoadPath",
     "Slab",
+    "SlipWeakening",
     "condense",
     "describe_behaviour",
     "simulate",

@@ -28,6 +28,7 @@ slipped form the increment's wave.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +40,8 @@ OPEN, STICK, SLIP = 0, 1, 2
 
 _MAX_ITERATIONS = 60
 _PREDICTOR = 0.9  # see _iterate
+_WEAKENING_TOLERANCE = 1e-8  # relative change of a wave coefficient that ends the fixed point
+_MAX_WEAKENINGS = 200
 _PLANS_KEPT = 16  # factorised zone states kept per body
 
 
@@ -84,6 +87,7 @@ class Increment:
     residual: float
     u_before: np.ndarray | None = None
     dx_before: float = 0.0
+    substeps: int = 1
 
 
 class Body:
@@ -176,6 +180,7 @@ class Body:
         dynamic: float,
         guess: np.ndarray | None = None,
         guess_sign: np.ndarray | None = None,
+        weakening: Callable[[np.ndarray], np.ndarray] | None = None,
     ) -> Increment:
         """Solve one increment from the previous relative positions ``s_prev``.
 
@@ -192,6 +197,11 @@ class Body:
             increment's). With fs == fd the iteration starts there, and from a
             stuck interface if that fails; with fs > fd every increment starts
             stuck (the interface heals).
+        weakening
+            With fs > fd, the friction coefficient of a slipping node as a
+            function of its slip in the increment's wave (mm; ``static`` at 0,
+            falling to ``dynamic``): slip-weakening. ``None``: the coefficient
+            drops to ``dynamic`` as soon as the node slips (Coulomb).
 
         Raises
         ------
@@ -211,7 +221,8 @@ class Body:
                                      heal=False)
             except NotConverged:
                 pass  # e.g. slip reversing direction: start again from a stuck interface
-        return self._iterate(control, s_prev, static, dynamic, guess, None, heal=True)
+        return self._iterate(control, s_prev, static, dynamic, guess, None, heal=True,
+                             weakening=weakening if static > dynamic else None)
 
     def _iterate(
         self,
@@ -223,6 +234,7 @@ class Body:
         guess_sign: np.ndarray | None,
         *,
         heal: bool,
+        weakening: Callable[[np.ndarray], np.ndarray] | None = None,
     ) -> Increment:
         n = self.n
         cascade = static > dynamic
@@ -233,11 +245,16 @@ class Body:
             state[state == SLIP] = STICK
         in_wave = np.zeros(n, dtype=bool)
         round_slipped = np.full(n, -1, dtype=np.int16)
+        # The coefficient of each node in the wave: fd, or under slip-weakening its
+        # coefficient at the slip it has made in the wave (a fixed point, below).
+        wave_limit = np.full(n, float(dynamic))
         iterations = 0
         rounds = 0
+        weakenings = 0
+        history: list[np.ndarray] = []
         while True:
             # Nodes outside the wave may slip only without a cascade (fs == fd).
-            limit = np.where(in_wave, dynamic, static)
+            limit = np.where(in_wave, wave_limit, static)
             may_slip = in_wave | (not cascade)
             seen: set[bytes] = set()
             first_iteration = rounds == 0
@@ -289,7 +306,7 @@ class Body:
                         joining = flipping & ~in_wave
                         in_wave |= joining
                         round_slipped[joining] = rounds
-                        limit = np.where(in_wave, dynamic, static)
+                        limit = np.where(in_wave, wave_limit, static)
                         may_slip = in_wave
                     new[flipping] = SLIP
                     new_sign[flipping] = np.where(trial[flipping] < 0, -1.0, 1.0)
@@ -305,6 +322,28 @@ class Body:
                 wave = state == SLIP
                 round_slipped[wave] = 0
                 break
+            if weakening is not None and in_wave.any():
+                # Slip-weakening: the wave's coefficients at the slip they give. From
+                # fd (the most slip) the slip only shrinks towards the fixed point, the
+                # largest equilibrium the weakening allows.
+                slip = np.abs(ds)
+                updated = np.where(in_wave & (state == SLIP), weakening(slip), wave_limit)
+                updated = np.clip(updated, dynamic, static)
+                if np.max(np.abs(updated - wave_limit)) > _WEAKENING_TOLERANCE * static:
+                    weakenings += 1
+                    if weakenings > _MAX_WEAKENINGS:
+                        raise NotConverged("slip-weakening coefficients still changing")
+                    history.append(updated)
+                    if len(history) == 3:
+                        # Aitken's extrapolation of the slowly converging coefficients
+                        a, b, c = history
+                        step = (c - b) - (b - a)
+                        safe = np.abs(step) > 1e-14
+                        jump = np.where(safe, c - (c - b) ** 2 / np.where(safe, step, 1.0), c)
+                        updated = np.clip(jump, dynamic, static)
+                        history.clear()
+                    wave_limit = updated
+                    continue
             over = (state == STICK) & ~in_wave & (np.abs(Q) > static * P * (1 + 1e-12))
             if not over.any():
                 break
@@ -315,7 +354,7 @@ class Body:
             state[over] = SLIP
             sign[over] = np.sign(Q[over])
 
-        limit = np.where(in_wave, dynamic, static)
+        limit = np.where(in_wave, wave_limit, static)
         residual = self.residual(P, Q, gap, ds, limit, control, dx)
         direction = np.where(state == SLIP, np.sign(ds), 0).astype(np.int8)
         u_before, dx_before = before if cascade else (u, dx)

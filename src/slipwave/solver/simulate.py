@@ -82,6 +82,72 @@ class Coulomb:
         return float(self.fs if self.fd is None else self.fd)
 
 
+    def weakening(self, slip: np.ndarray) -> np.ndarray:
+        """The coefficient of slipping nodes against their slip: fd at once (Coulomb).
+
+        Parameters
+        ----------
+        slip
+            Each node's slip in the current wave, mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            fd everywhere.
+
+        """
+        return np.full(np.shape(slip), self.dynamic)
+
+
+@dataclass(frozen=True)
+class SlipWeakening(Coulomb):
+    """Linear slip-weakening: a slipping node's coefficient falls from fs to fd over Dc.
+
+    mu(delta) = fs - (fs - fd) min(delta / Dc, 1), delta the node's slip in the current
+    wave; a stuck node holds up to fs (the interface heals between waves, as under
+    Coulomb with fs > fd, which is the limit Dc -> 0). Run-in (``fs_final``) applies to
+    fs as for :class:`Coulomb`.
+
+    Attributes
+    ----------
+    dc
+        The slip-weakening distance Dc, mm.
+
+    """
+
+    dc: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not (self.dc > 0 and np.isfinite(self.dc)):
+            raise SlipwaveError(f"slip-weakening needs a distance dc > 0 mm, not {self.dc}")
+        if not self.fs > self.dynamic:
+            raise SlipwaveError("slip-weakening needs fs > fd")
+
+    def weakening(self, slip: np.ndarray) -> np.ndarray:
+        """The coefficient of slipping nodes against their slip in the wave.
+
+        Parameters
+        ----------
+        slip
+            Each node's slip in the current wave, mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            fs - (fs - fd) min(slip / dc, 1) (with the run-in's fs of the moment
+            taken by the solver as the upper bound).
+
+        Examples
+        --------
+        >>> SlipWeakening(fs=1.0, fd=0.6, dc=0.2).weakening(np.array([0.0, 0.1, 0.5])).tolist()
+        [1.0, 0.8, 0.6]
+
+        """
+        progress = np.minimum(np.asarray(slip, dtype=float) / self.dc, 1.0)
+        return self.fs - (self.fs - self.dynamic) * progress
+
+
 @dataclass(frozen=True)
 class LoadPath:
     """The bench's loading: normal approach, then the flat's tangential travel.
@@ -189,7 +255,9 @@ class _Run:
         if self.frictionless:
             fs = fd = 0.0
         increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess,
-                                              self.guess_sign)
+                                              self.guess_sign, weakening=(
+                                                  self.friction.weakening if isinstance(
+                                                      self.friction, SlipWeakening) else None))
         if not increment.residual <= RESIDUAL_TOLERANCE:
             raise NotConverged(f"residual {increment.residual:.3g} above tolerance")
         return increment
@@ -217,6 +285,7 @@ class _Run:
         merged = parts[-1]
         merged.round_slipped = np.maximum(parts[0].round_slipped, parts[1].round_slipped)
         merged.iterations = parts[0].iterations + parts[1].iterations
+        merged.substeps = parts[0].substeps + parts[1].substeps
         merged.residual = max(parts[0].residual, parts[1].residual)
         return merged
 
@@ -284,6 +353,7 @@ class _Run:
             "static_friction": self.friction.static_after(self.gross_slips),
             "residual": increment.residual,
             "iterations": increment.iterations,
+            "substeps": increment.substeps,
         })
 
     def count_gross(self) -> None:
@@ -604,6 +674,9 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
             "units": "1", "long_name": "relative complementarity residual"}),
         "iterations": ("step", column("iterations").astype(np.int32), {
             "units": "1", "long_name": "active-set iterations"}),
+        "substeps": ("step", column("substeps").astype(np.int32), {
+            "units": "1", "long_name": "parts the step was solved in (1: whole; more: "
+                                       "sub-stepped, each part its own wave)"}),
     }
     coords = {
         "step": ("step", np.arange(len(steps)), {"long_name": "load step"}),
@@ -623,6 +696,11 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
     attrs["slab_profile"] = "flat" if slab.profile is None else repr(slab.profile)
     attrs["friction_fs"] = run.friction.fs
     attrs["friction_fd"] = run.friction.dynamic
+    if isinstance(run.friction, SlipWeakening):
+        attrs["friction_law"] = "linear slip-weakening"
+        attrs["friction_dc"] = run.friction.dc
+    else:
+        attrs["friction_law"] = "Coulomb"
     if run.friction.fs_final is not None:
         attrs["friction_fs_final"] = run.friction.fs_final
         attrs["friction_runin_slips"] = run.friction.runin_slips
