@@ -283,6 +283,20 @@ def _sawtooth(args: argparse.Namespace) -> None:
         print(path)
 
 
+def _load_path_arguments(parser: argparse.ArgumentParser, *, normal_control: str,
+                         normal_friction: str) -> None:
+    """The options of a :class:`~slipwave.solver.LoadPath` that `simulate` and `map row` share."""
+    parser.add_argument("--normal-load", type=float, default=default.NORMAL_LOAD_N,
+                        help="N, newtons (%(default)s)")
+    parser.add_argument("--tangential-step", type=float, default=default.TANGENTIAL_STEP_N,
+                        help="T step, newtons (%(default)s)")
+    parser.add_argument("--normal-control", choices=["force", "displacement"],
+                        default=normal_control, help="held after the normal loading: N "
+                        "(force) or the flat's normal position (%(default)s)")
+    parser.add_argument("--normal-friction", choices=["on", "off"], default=normal_friction,
+                        help="friction during the normal loading (%(default)s)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``slipwave`` (exposed for documentation and tests).
 
@@ -347,14 +361,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
     sim.add_argument("--fs", type=float, required=True, help="static friction coefficient")
     sim.add_argument("--fd", type=float, default=None, help="dynamic coefficient (fs)")
-    sim.add_argument("--normal-load", type=float, default=default.NORMAL_LOAD_N,
-                     help="N, newtons (%(default)s)")
-    sim.add_argument("--tangential-step", type=float, default=default.TANGENTIAL_STEP_N,
-                     help="T step, newtons (%(default)s)")
-    sim.add_argument("--normal-control", choices=["displacement", "force"],
-                     default="displacement", help="what is held after the normal loading")
-    sim.add_argument("--normal-friction", choices=["on", "off"], default="on",
-                     help="friction during the normal loading (%(default)s)")
+    _load_path_arguments(sim, normal_control="displacement", normal_friction="on")
     sim.add_argument("--max-travel", type=float, default=None,
                      help="go on past gross sliding up to this flat travel, mm")
     sim.add_argument("--travel-step", type=float, default=None,
@@ -382,17 +389,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "(%(default)s)")
     row.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
                      help="elements along the contact (%(default)s)")
-    row.add_argument("--normal-load", type=float, default=default.NORMAL_LOAD_N,
-                     help="N, newtons (%(default)s)")
-    row.add_argument("--tangential-step", type=float, default=default.TANGENTIAL_STEP_N,
-                     help="T step, newtons (%(default)s)")
-    row.add_argument("--normal-control", choices=["force", "displacement"],
-                     default=default.MAP_NORMAL_CONTROL,
-                     help="held after the normal loading: N (force) or the flat's normal "
-                     "position (%(default)s)")
-    row.add_argument("--normal-friction", choices=["on", "off"],
-                     default="on" if default.MAP_NORMAL_FRICTION else "off",
-                     help="friction during the normal loading (%(default)s)")
+    _load_path_arguments(row, normal_control=default.MAP_NORMAL_CONTROL,
+                         normal_friction="on" if default.MAP_NORMAL_FRICTION else "off")
     row.add_argument("--min-zone", type=_positive_float, default=default.MIN_ZONE_MM,
                      help="shortest zone that decides anything, mm (%(default)s)")
     row.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
