@@ -71,3 +71,23 @@ def test_a_spring_that_does_not_give_way_is_refused(hl075):
     rigid["T"] = ("time", -rigid["T"].values)  # DT no longer gives way as T rises
     with pytest.raises(SlipwaveError, match="machine_stiffness_n_mm"):
         drive(rigid)
+
+
+@pytest.mark.slow
+def test_the_setup_runs_the_test_again_through_the_solver(hl075):
+    """The bench's own law on the setup read from hl075's files: its gross slips again."""
+    import pandas as pd
+
+    from slipwave.bench.generate import simulate_test
+    from slipwave.solver import Coulomb
+
+    setup = read_test_setup(hl075, {"test_id": "hl075", **MATERIAL})
+    assert setup["loading_time_s"] == pytest.approx(10.0, abs=0.2)
+    result = simulate_test(setup.bench_test(Coulomb(fs=0.9, fd=0.6, fs_final=1.2,
+                                                    runin_slips=4)), seed=0)
+    truth = pd.read_csv(RAW / "truth" / "hl075_events.csv")
+    simulated = result.events[result.events["kind"] == "gross_slip"]
+    measured = truth[truth["kind"] == "gross_slip"]
+    assert len(simulated) == len(measured) == 8
+    np.testing.assert_allclose(simulated["ratio_before"], measured["ratio_before"], atol=0.01)
+    np.testing.assert_allclose(simulated["t_start"], measured["t_start"], atol=1.5)

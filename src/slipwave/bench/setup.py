@@ -18,7 +18,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from slipwave.bench.generate import BenchTest
+from slipwave.defaults import CONTACT_ELEMENTS
 from slipwave.errors import SlipwaveError
+from slipwave.solver import Coulomb
 
 GEOMETRY = {
     "length_mm": "contact length L, mm",
@@ -63,7 +66,7 @@ class TestSetup:
     settings
         ``length_mm``, ``height_mm``, ``width_mm``, ``youngs_modulus_mpa``,
         ``poisson_ratio``, ``normal_load_n``, ``speed_mm_s``, ``machine_stiffness_n_mm``,
-        ``duration_s``, each a :class:`Setting`.
+        ``duration_s``, ``loading_time_s``, each a :class:`Setting`.
     edge_reference
         What the edge sensors read against (:data:`EDGE_REFERENCES`), from the
         campaign table's ``edge_reference`` column.
@@ -78,6 +81,34 @@ class TestSetup:
 
     def __getitem__(self, key: str) -> float:
         return self.settings[key].value
+
+    def bench_test(self, friction: Coulomb, *, elements: int = CONTACT_ELEMENTS) -> BenchTest:
+        """The virtual-bench spec that runs this test with a friction law (no video).
+
+        Parameters
+        ----------
+        friction
+            The law (:class:`~slipwave.solver.Coulomb`, with run-in, or
+            :class:`~slipwave.solver.SlipWeakening`).
+        elements
+            Elements along the contact.
+
+        Returns
+        -------
+        BenchTest
+            The test's geometry, material, loads, drive and duration with the law.
+
+        """
+        return BenchTest(
+            self.test_id, height=self["height_mm"], length=self["length_mm"],
+            width=self["width_mm"], youngs_modulus=self["youngs_modulus_mpa"],
+            poisson_ratio=self["poisson_ratio"], elements=elements, fs=friction.fs,
+            fd=friction.dynamic, fs_final=friction.fs_final,
+            runin_slips=friction.runin_slips if friction.fs_final is not None else 4,
+            dc=getattr(friction, "dc", None), normal_load=self["normal_load_n"],
+            speed=self["speed_mm_s"], duration=self["duration_s"],
+            loading_time=self["loading_time_s"],
+            machine_stiffness=self["machine_stiffness_n_mm"], video="none")
 
     def to_dict(self) -> dict[str, Any]:
         """The setup in plain types, each value with its source.
@@ -129,6 +160,30 @@ def normal_load_plateau(recording: xr.Dataset) -> float:
         raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: the tangential "
                             "loading starts with the recording: no normal-load plateau")
     return float(np.nanmedian(np.abs(recording["N"].values[before])))
+
+
+def normal_loading_time(recording: xr.Dataset, plateau: float) -> float:
+    """How long the normal loading took, s: until |N| first reached 99 % of its plateau.
+
+    Parameters
+    ----------
+    recording
+        With an N channel.
+    plateau
+        The normal load reached (:func:`normal_load_plateau`), N.
+
+    Returns
+    -------
+    float
+        The time from the recording's start, s.
+
+    """
+    time = recording["time"].values
+    reached = np.abs(recording["N"].values) >= 0.99 * plateau
+    if "N" not in recording or not reached.any():
+        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: N never reaches "
+                            "its plateau: no normal loading to time")
+    return float(time[int(np.argmax(reached))] - time[0])
 
 
 def drive(recording: xr.Dataset) -> tuple[float, float]:
@@ -247,6 +302,8 @@ def read_test_setup(recording: xr.Dataset, cells: Mapping[str, Any]) -> TestSetu
     settings["machine_stiffness_n_mm"] = stiffness
     time = recording["time"].values
     settings["duration_s"] = Setting(float(time[-1] - time[0]), "recording length")
+    settings["loading_time_s"] = Setting(normal_loading_time(recording, normal.value),
+                                         "measured: |N| reaching 99 % of its plateau")
     reference = str(cells.get("edge_reference", "") or "").strip()
     if reference not in EDGE_REFERENCES:
         what = f"is {reference!r}" if reference else "is not given"
