@@ -27,10 +27,11 @@ from slipwave.defaults import (
     CONVENTIONS,
     MAP_NORMAL_CONTROL,
     MAP_NORMAL_FRICTION,
+    MIN_ZONE_MM,
 )
 from slipwave.errors import SlipwaveError
 from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
-from slipwave.solver.behaviour import MIN_ZONE_MM, ZD, ZG, describe_behaviour
+from slipwave.solver.behaviour import ZD, ZG, describe_behaviour
 from slipwave.solver.slab import CondensationStore
 
 PAPER_FRICTIONS = tuple(round(0.10 + 0.01 * k, 2) for k in range(131))
@@ -298,22 +299,6 @@ def contiguity(whole: xr.Dataset) -> float:
     return float(same.mean())
 
 
-__all__ = [
-    "PAPER_FRICTIONS",
-    "PAPER_HEIGHT_RATIOS",
-    "ZD",
-    "ZG",
-    "assemble_map",
-    "behaviour_legend",
-    "contiguity",
-    "friction_grid",
-    "map_agreement",
-    "map_row",
-    "map_table",
-    "place_tests",
-    "representative_cases",
-    "simulate_case",
-]
 
 
 def friction_grid(start: float, stop: float, step: float) -> np.ndarray:
@@ -469,3 +454,21 @@ def behaviour_legend(whole: xr.Dataset) -> str:
                      f"{hl.max():g}, f {f.min():.2f}-{f.max():.2f}): "
                      f"{whole['behaviours'].values[k]}")
     return "\n".join(lines)
+
+
+__all__ = [
+    "PAPER_FRICTIONS",
+    "PAPER_HEIGHT_RATIOS",
+    "ZD",
+    "ZG",
+    "assemble_map",
+    "behaviour_legend",
+    "contiguity",
+    "friction_grid",
+    "map_agreement",
+    "map_row",
+    "map_table",
+    "place_tests",
+    "representative_cases",
+    "simulate_case",
+]

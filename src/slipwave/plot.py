@@ -367,7 +367,8 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
 
     legend_lines = [textwrap.fill(f"{name}: {sequence}", 110, subsequent_indent="      ")
                     for name, sequence in zip(names, whole["behaviours"].values, strict=True)]
-    legend_height = 0.16 * sum(line.count("\n") + 1 for line in legend_lines) + 0.6
+    legend_rows = sum(line.count("\n") + 1 for line in legend_lines)
+    legend_height = 0.16 * legend_rows + 0.6
     height = 6.2 + legend_height
     fig = Figure(figsize=(8.0, height))
     # fixed places: the map above, its legend in words below
@@ -404,7 +405,7 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
                  "the right edge, L)", fontsize=10)
     legend_ax.set_axis_off()
     y = 1.0
-    step = 1.0 / max(1, sum(line.count("\n") + 1 for line in legend_lines))
+    step = 1.0 / max(1, legend_rows)
     for k, line in enumerate(legend_lines):
         legend_ax.add_patch(Rectangle((0.0, y - step * 0.85), 0.02, step * 0.75,
                                       transform=legend_ax.transAxes, color=colours(k)))

@@ -178,9 +178,12 @@ def normal_loading_time(recording: xr.Dataset, plateau: float) -> float:
         The time from the recording's start, s.
 
     """
+    if "N" not in recording:
+        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: no N channel to "
+                            "time the normal loading on")
     time = recording["time"].values
     reached = np.abs(recording["N"].values) >= 0.99 * plateau
-    if "N" not in recording or not reached.any():
+    if not reached.any():
         raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: N never reaches "
                             "its plateau: no normal loading to time")
     return float(time[int(np.argmax(reached))] - time[0])

@@ -244,8 +244,7 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
     if not _approach_had_friction(ds):
         # A frictionless approach leaves every node sliding freely: the tangential
         # loading starts from a clean interface, friction engaging everywhere.
-        codes[0] = np.where(codes[0] == CONDITIONS.index("open"), codes[0],
-                            CONDITIONS.index("stick"))
+        codes[0] = np.where(codes[0] == _OPEN, _OPEN, _STICK)
     spacing = float(x[1] - x[0])
     # A zone dates from when half the decisive size of it was there (a node or two):
     # the same physical size on any mesh.
@@ -263,13 +262,9 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
     if min_sweep is None:
         min_sweep = MIN_SWEEP_FRACTION * float(x[-1] - x[0])
     events = _events(zones, normal_end, T, N, min_size, min_sweep, 0.5 * float(x[0] + x[-1]))
-    if gross.size:
-        events.append({"step": last, "event": "gross sliding", "T": float(T[last]),
-                       "ratio": float(T[last] / N[last])})
-    elif end == "jammed":
-        k = int(tangential[-1])
-        events.append({"step": k, "event": "jammed", "T": float(T[k]),
-                       "ratio": float(T[k] / N[k])})
+    if end != "not reached":
+        k = last if gross.size else int(tangential[-1])
+        events.append({"step": k, "event": end, "T": float(T[k]), "ratio": float(T[k] / N[k])})
     sequence = tuple(e["phrase"] for e in events if e.get("phrase")) + (
         (end,) if end != "not reached" else ())
     openings = [e for e in events if e["event"] == "opening"]
@@ -307,8 +302,8 @@ class _Zone:
         return 0.5 * (self.left + self.right)
 
 
-_OPEN, _SLIP_BACK, _SLIP_FORWARD = (CONDITIONS.index(c) for c in
-                                    ("open", "slip_back", "slip_forward"))
+_OPEN, _STICK, _SLIP_BACK, _SLIP_FORWARD = (CONDITIONS.index(c) for c in
+                                            ("open", "stick", "slip_back", "slip_forward"))
 
 
 def _events(zones: list[_Zone], normal_end: int, T: np.ndarray, N: np.ndarray,
@@ -445,4 +440,4 @@ def _main_slip(zones: list[_Zone], slips: list[dict[str, Any]]) -> dict[str, Any
     return next((e for e in slips if e["zone"] == largest), None)
 
 
-__all__ = ["CONDITIONS", "MIN_ZONE_MM", "Behaviour", "describe_behaviour"]
+__all__ = ["Behaviour", "describe_behaviour"]

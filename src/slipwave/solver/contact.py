@@ -562,10 +562,7 @@ class _Plan:
             extra.append(body.sum_x @ u)
         if self.N_given:
             extra.append(body.sum_y @ u)
-        if not extra:
-            return rows
-        return np.concatenate([rows, np.atleast_1d(np.array(extra))
-                               if u.ndim == 1 else np.array(extra)])
+        return np.concatenate([rows, np.array(extra)]) if extra else rows
 
     # Compliance form: unknown forces Q, P of stuck nodes and P of slipping ones.
     def _compliance_matrix(self) -> np.ndarray:

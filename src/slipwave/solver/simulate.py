@@ -82,23 +82,6 @@ class Coulomb:
         return float(self.fs if self.fd is None else self.fd)
 
 
-    def weakening(self, slip: np.ndarray) -> np.ndarray:
-        """The coefficient of slipping nodes against their slip: fd at once (Coulomb).
-
-        Parameters
-        ----------
-        slip
-            Each node's slip in the current wave, mm.
-
-        Returns
-        -------
-        numpy.ndarray
-            fd everywhere.
-
-        """
-        return np.full(np.shape(slip), self.dynamic)
-
-
 @dataclass(frozen=True)
 class SlipWeakening(Coulomb):
     """Linear slip-weakening: a slipping node's coefficient falls from fs to fd over Dc.
