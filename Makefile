@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 # Rules call the `slipwave` command: the venv goes first on PATH.
 export PATH := $(BIN):$(PATH)
 
-.PHONY: install run test test-fast lint bench clean
+.PHONY: install system-deps run test test-fast lint bench slurm-test clean
 
 install: $(STAMP)
 
@@ -15,6 +15,19 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
+
+# What pip cannot install: Debian's Chromium and poppler-utils, with which the tests look
+# at the reports as a reader does (they skip, saying so, without them), and the Pango
+# that WeasyPrint prints PDFs with. Needs root (CI runs as root); apt-get only where
+# something is missing.
+SYSTEM_PACKAGES := chromium poppler-utils libpango-1.0-0 libpangoft2-1.0-0 fonts-dejavu-core
+system-deps:
+	@missing=$$(for p in $(SYSTEM_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+		if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
+		else echo "missing Debian packages (install them as root): $$missing"; fi; \
+	fi
 
 run: $(STAMP)
 	$(BIN)/snakemake --cores 2
@@ -32,6 +45,11 @@ test: lint
 # The unit tests and doctests alone (no whole virtual-bench test, no workflow run).
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -m "not slow"
+
+# The workflow on a real one-node SLURM cluster through Snakemake's executor plugin
+# (installs slurm-wlm and munge with apt-get; needs root); not part of `make test`.
+slurm-test: $(STAMP)
+	bash tests/slurm/run.sh
 
 # Every benchmark runs; the target fails if any missed its target.
 bench: $(STAMP)

@@ -8,14 +8,15 @@ import json
 
 from snakemake.utils import min_version, validate
 
+from slipwave.map import friction_grid, shard_count
 from slipwave.campaign import (
     check_campaign,
     check_config_files,
     column_pairs,
     edge_convention,
-    gross_edge_ratio,
     height_ratio_pairs,
     read_campaign,
+    setup_cells,
 )
 
 min_version("8.10")
@@ -41,11 +42,18 @@ with open(f"{workflow.basedir}/workflow/schemas/tests.schema.json") as schema:
 TEST_IDS = list(campaign["test_id"])
 FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
 MAP_HEIGHT_RATIOS = [f"{ratio:g}" for ratio in config["map"]["height_ratios"]]
+MAP_SHARDS = shard_count(friction_grid(*config["map"]["frictions"]), config["map"]["shard_size"])
+MAP_SHARD_FILES = [
+    f"results/map/rows/hl{ratio}-{shard}.nc"
+    for ratio in MAP_HEIGHT_RATIOS
+    for shard in range(MAP_SHARDS)
+]
 
 
 wildcard_constraints:
     test_id="|".join(TEST_IDS) or "no-tests",
     height_ratio="|".join(MAP_HEIGHT_RATIOS).replace(".", r"\."),
+    shard=r"\d+",
 
 
 include: "workflow/rules/common.smk"
@@ -56,6 +64,9 @@ include: "workflow/rules/kymograph.smk"
 include: "workflow/rules/waves.smk"
 include: "workflow/rules/report.smk"
 include: "workflow/rules/map.smk"
+include: "workflow/rules/fit.smk"
+include: "workflow/rules/simulate.smk"
+include: "workflow/rules/compare.smk"
 
 
 rule all:
@@ -63,8 +74,16 @@ rule all:
         expand("results/{test_id}/recording.nc", test_id=TEST_IDS),
         expand("results/{test_id}/events.csv", test_id=TEST_IDS),
         expand("results/{test_id}/waves.csv", test_id=FILMED_IDS),
-        expand("reports/{test_id}.html", test_id=TEST_IDS),
+        expand("reports/{test_id}.{format}", test_id=TEST_IDS, format=("html", "pdf")),
+        "reports/campaign.html",
+        "reports/campaign.pdf",
         "results/summary.csv",
         "results/map/map.nc",
         "results/map/map.png",
+        *(
+            expand("results/{test_id}/comparison.csv", test_id=TEST_IDS)
+            + ["results/fits.csv"]
+            if config["fit"]["enabled"]
+            else []
+        ),
     default_target: True

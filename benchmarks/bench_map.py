@@ -24,6 +24,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import argparse
+import re
 import shutil
 import subprocess
 import sys
@@ -49,13 +50,26 @@ ROOT = Path(__file__).parents[1]
 BIN = Path(sys.executable).parent
 
 
+def mean_case_seconds(logs: Path) -> float:
+    """Mean wall time per case, from the row jobs' logs (the map holds no timings)."""
+    total = cases = 0.0
+    for line in (line for log in logs.glob("hl*.log") for line in log.read_text().splitlines()):
+        found = re.search(r": (\d+) cases in ([\d.]+) s", line)
+        if found:
+            cases += int(found.group(1))
+            total += float(found.group(2))
+    return total / cases if cases else float("nan")
+
+
 def timed_workflow(folder: Path) -> tuple[float, float, xr.Dataset]:
     for name in ["Snakefile", "workflow", "config", "profiles", "raw_data"]:
         source = ROOT / name
         (shutil.copytree if source.is_dir() else shutil.copy)(source, folder / name)
     env = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}",
            "SLIPWAVE_CACHE_DIR": str(folder / "cache")}
-    snakemake = [str(BIN / "snakemake"), "--cores", "2", "--quiet", "all"]
+    # the map alone: the tests' fits are not part of it
+    snakemake = [str(BIN / "snakemake"), "--cores", "2", "--quiet", "all", "--config",
+                 "fit={enabled: false}"]
     subprocess.run([*snakemake, "--", "results/summary.csv"], cwd=folder, env=env, check=True)
     start = time.perf_counter()
     subprocess.run([*snakemake, "--", "results/map/map.nc"], cwd=folder, env=env, check=True)
@@ -63,7 +77,9 @@ def timed_workflow(folder: Path) -> tuple[float, float, xr.Dataset]:
     start = time.perf_counter()
     subprocess.run([*snakemake, "--", "results/map/map.png"], cwd=folder, env=env, check=True)
     figures = time.perf_counter() - start
-    return seconds, figures, read_dataset(folder / "results/map/map.nc")
+    whole = read_dataset(folder / "results/map/map.nc")
+    whole.attrs["mean_case_seconds"] = mean_case_seconds(folder / "results/logs/map")
+    return seconds, figures, whole
 
 
 def _row(args: tuple[float, int]) -> xr.Dataset:
@@ -90,7 +106,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         seconds, figures, whole = timed_workflow(Path(folder))
     cases = int(whole["behaviour"].size)
-    per_case = float(whole["seconds"].mean())
+    per_case = float(whole.attrs["mean_case_seconds"])
     print(f"map: {cases} cases, snakemake --cores 2 from a clean results/map/ and cache: "
           f"{seconds:.1f} s wall ({check('map wall time, s', seconds, 60.0, at_least=False)} "
           f"the 60 s target; load average {load:.2f} before), {per_case * 1e3:.1f} ms per "

@@ -21,7 +21,7 @@ CSV_VARIANTS = [
 CSV_ALPHABET = list("0123456789.,;\t\n\r-+eE#: []()TNDGtimsµk")
 
 TABLE_VARIANTS = [
-    "test_id\tcsv\tframes\tcolumns\tgross_edge_ratio\na\tx.csv\t\t\t\nb\ty.csv\tv.mkv\t\t1.3\n",
+    "test_id\tcsv\tframes\tcolumns\tedge_reference\na\tx.csv\t\t\t\nb\ty.csv\tv.mkv\t\tflat\n",
     "# campaign\ntest_id\tcsv\n\nrun01\t/data/r1.csv\n# gone\nrun02\t/data/r2.csv\n",
     "test_id\tcsv\tcolumns\tfps\nhl050\traw.csv\tlabview_en\t25\n",
 ]

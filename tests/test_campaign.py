@@ -6,8 +6,8 @@ from slipwave.campaign import (
     check_campaign,
     column_map,
     column_pairs,
-    gross_edge_ratio,
     read_campaign,
+    setup_cells,
 )
 from slipwave.errors import ConfigError
 
@@ -43,12 +43,10 @@ def test_column_maps():
         column_map(config, "de")
 
 
-def test_gross_edge_ratio_per_test_wins():
-    config = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {}}
-    assert gross_edge_ratio(config, {"test_id": "a", "gross_edge_ratio": ""}) == 0.9
-    assert gross_edge_ratio(config, {"test_id": "a", "gross_edge_ratio": "1.3"}) == 1.3
-    with pytest.raises(ConfigError, match=r"test 'a': gross_edge_ratio '-1' must be positive"):
-        gross_edge_ratio(config, {"test_id": "a", "gross_edge_ratio": "-1"})
+def test_setup_cells_pass_only_the_filled_configuration_columns():
+    row = {"test_id": "a", "height_mm": "40", "poisson_ratio": "", "edge_reference": "flat",
+           "frames": "x.mkv"}
+    assert setup_cells(row) == ["height_mm=40", "edge_reference=flat"]
 
 
 def test_check_campaign_names_the_test_with_an_unknown_map(write):

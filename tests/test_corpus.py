@@ -163,7 +163,7 @@ def test_malformed_bench_config(tmp_path, capsys, name):
 
 BIN = Path(sys.executable).parent
 ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
-TABLE = "test_id\tcsv\tframes\tcolumns\tgross_edge_ratio\n"
+TABLE = "test_id\tcsv\tframes\tcolumns\tedge_reference\n"
 CSV = str(ROOT / "raw_data/bench/hl050.csv")
 
 # name -> (config YAML or None for the default, campaign table or None, expected message)
@@ -185,8 +185,8 @@ WORKFLOW_CASES = {
     "no-rows": (None, TABLE, r"t.tsv: no test: the table has a header but no row"),
     "unknown-map": (None, TABLE + f"a\t{CSV}\t\tvendor_y\t\n",
                     r"t.tsv, line 2 \(test 'a'\): column map 'vendor_y' is not in the config"),
-    "ratio-not-a-number": (None, TABLE + f"a\t{CSV}\t\t\tabc\n",
-                           r"t.tsv, line 2 \(test 'a'\): gross_edge_ratio: 'abc' does not match"),
+    "reference-unknown": (None, TABLE + f"a\t{CSV}\t\t\tabc\n",
+                          r"t.tsv, line 2 \(test 'a'\): edge_reference: 'abc' does not match"),
 }
 
 

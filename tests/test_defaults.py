@@ -26,6 +26,10 @@ WORKFLOW_PARAMETERS = {
     ("detection", "gross_edge_ratio"): (defaults.GROSS_EDGE_RATIO, "detect", "gross_edge_ratio"),
     ("detection", "edge_convention"): (defaults.EDGE_CONVENTION, "detect", "edge_convention"),
     ("video", "length_mm"): (defaults.CONTACT_LENGTH_MM, "kymograph", "length"),
+    ("fit", "laws"): (list(defaults.FIT_LAWS), "fit", "laws"),
+    ("fit", "elements"): (defaults.FIT_ELEMENTS, "fit", "elements"),
+    ("fit", "max_evaluations"): (defaults.FIT_MAX_EVALUATIONS, "fit", "max_evaluations"),
+    ("fit", "load_calibration"): (defaults.LOAD_CALIBRATION, "fit", "load_calibration"),
     ("video", "band_mm"): (list(defaults.BAND_MM), "kymograph", "band"),
 }
 

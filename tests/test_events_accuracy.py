@@ -23,8 +23,8 @@ import yaml
 
 from slipwave.bench.generate import BenchResult, load_tests, simulate_test
 from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors, clean_signals
-from slipwave.campaign import read_campaign
 from slipwave.events import detect_events
+from slipwave.fit import edge_threshold
 from slipwave.io import read_acquisition, write_acquisition
 
 pytestmark = pytest.mark.slow  # whole virtual-bench tests: make test-fast leaves them out
@@ -38,14 +38,13 @@ CONVENTIONS = ("x_axis", "outward")  # edge sensors along +x, or each reading ou
 
 @pytest.fixture(scope="module")
 def campaign() -> dict[str, tuple[BenchResult, float]]:
-    """Each default test's simulation and its campaign gross_edge_ratio."""
+    """Each default test's simulation and its gross/partial threshold, read off its slips."""
     config = yaml.safe_load((ROOT / "raw_data/bench/campaign.yaml").read_text())
-    table = read_campaign(ROOT / "config/tests.tsv")
     tests = {}
     for spec in load_tests(config):
         spec = dataclasses.replace(spec, video="none")
-        ratio = table.loc[spec.test_id, "gross_edge_ratio"] or "0.9"
-        tests[spec.test_id] = (simulate_test(spec, seed=0), float(ratio))
+        result = simulate_test(spec, seed=0)
+        tests[spec.test_id] = (result, edge_threshold(result.simulation))
     return tests
 
 

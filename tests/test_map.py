@@ -22,6 +22,8 @@ from slipwave.map import (
     map_table,
     place_tests,
     representative_cases,
+    shard,
+    shard_count,
 )
 from slipwave.plot import plot_map, plot_zone_histories
 from slipwave.solver import LoadPath
@@ -146,3 +148,19 @@ def test_a_failing_case_is_named(monkeypatch):
     monkeypatch.setattr(module, "simulate", broken)
     with pytest.raises(SlipwaveError, match=r"map case H/L 0.5, f 0.7: step 3"):
         map_row(0.5, [0.7], elements=20)
+
+
+def test_the_map_is_the_same_whatever_its_sharding():
+    frictions = friction_grid(0.4, 1.0, 0.2)
+    path = LoadPath(normal_load=76.0, tangential_step=4.0)
+    whole = map_row(0.5, frictions, elements=24, path=path)
+    pieces = [map_row(0.5, shard(frictions, k, 3), elements=24, path=path)
+              for k in range(shard_count(frictions, 3))]
+    assert [p.sizes["friction"] for p in pieces] == [3, 1]
+    once, sharded = assemble_map([whole]), assemble_map(pieces[::-1])
+    for name in ("sequence", "behaviour", "ratio_at_gross", "first_slip_x"):
+        assert (once[name].values == sharded[name].values).all(), name
+    with pytest.raises(SlipwaveError, match="overlap in f"):
+        assemble_map([whole, pieces[0]])
+    with pytest.raises(SlipwaveError, match="lies beyond the row"):
+        shard(frictions, 2, 3)

@@ -29,6 +29,9 @@ pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 # benchmarks/bench_map.py): two H/L, four f, 40 elements.
 SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n"
              "  elements: 40\n")
+# and each test's fit is Coulomb's alone on a coarse mesh (the full fit is benchmarked)
+SMALL_FIT = "fit:\n  laws: [coulomb]\n  elements: 40\n  max_evaluations: 4\n"
+NO_FIT = "fit:\n  enabled: false\n"
 
 
 @pytest.fixture
@@ -40,7 +43,7 @@ def workdir(tmp_path: Path) -> Path:
         else:
             shutil.copy(source, tmp_path / name)
     with open(tmp_path / "config/config.yaml", "a") as config:
-        config.write(SMALL_MAP)
+        config.write(SMALL_MAP + SMALL_FIT)
     return tmp_path
 
 
@@ -70,13 +73,22 @@ def test_full_run_on_default_campaign(workdir):
         events = pd.read_csv(workdir / f"results/{test_id}/events.csv")
         truth = pd.read_csv(workdir / f"raw_data/bench/truth/{test_id}_events.csv")
         visible = truth[truth["visible"]]
-        # the default campaign's detection is exact (hl075 with its own gross_edge_ratio)
+        # the default campaign's detection is exact, each test's gross/partial threshold
+        # read off its own simulation (no hand-set value in the table)
         assert events["kind"].value_counts().to_dict() == visible["kind"].value_counts().to_dict()
         assert summary.loc[test_id, "gross_slip_waves"] == (visible["kind"] == "gross_slip").sum()
         page = (workdir / f"reports/{test_id}.html").read_text()
         assert f"Test {test_id}" in page
         assert "<h2>Events</h2>" in page and "<h2>Video</h2>" in page
-        for rule in ("ingest", "detect", "kymograph", "waves", "report"):
+        assert "<h2>Comparison</h2>" in page and "<h2>Space and time</h2>" in page
+        assert (workdir / f"reports/{test_id}.pdf").read_bytes().startswith(b"%PDF")
+        comparison = pd.read_csv(workdir / f"results/{test_id}/comparison.csv")
+        assert set(comparison["verdict"]) <= {"agrees", "differs", "not compared"}
+        assert len(comparison) == 14
+        fit = json.loads((workdir / f"results/{test_id}/fit.json").read_text())
+        assert fit["setup"]["edge_reference"] == "frame" and fit["chosen"] == "coulomb"
+        for rule in ("ingest", "detect", "kymograph", "waves", "report", "fit", "simulate",
+                     "compare"):
             assert (workdir / f"results/logs/{rule}/{test_id}.log").exists()
         kymo = read_dataset(workdir / f"results/{test_id}/kymograph.nc")
         assert kymo.sizes["time"] > 6900 and kymo["x"].attrs["units"] == "mm"
@@ -84,6 +96,11 @@ def test_full_run_on_default_campaign(workdir):
         assert (fused["source"] != "video").sum() == len(events)
         clock = json.loads((workdir / f"results/{test_id}/clock.json").read_text())
         assert clock["pairs"] >= 30
+    campaign = (workdir / "reports/campaign.html").read_text()
+    assert all(f'href="{test_id}.html"' in campaign for test_id in ids)
+    assert (workdir / "reports/campaign.pdf").read_bytes().startswith(b"%PDF")
+    fits = pd.read_csv(workdir / "results/fits.csv")
+    assert list(fits["test_id"]) == ids and (workdir / "results/fits.png").stat().st_size > 1000
     # the behaviour map: one row job per H/L, the map, its figures with the tests on them
     whole = read_dataset(workdir / "results/map/map.nc")
     assert whole["height_ratio"].values.tolist() == [0.25, 0.5]
@@ -92,10 +109,10 @@ def test_full_run_on_default_campaign(workdir):
     assert len(pd.read_csv(workdir / "results/map/map.csv")) == 8
     for name in ("map.png", "zones.png", "legend.md"):
         assert (workdir / "results/map" / name).stat().st_size > 100
-    for log in ("hl0.25", "hl0.5", "map", "map_figures"):
+    for log in ("hl0.25-0", "hl0.5-0", "map", "map_figures"):
         assert (workdir / f"results/logs/map/{log}.log").exists()
     assert "3 tests placed" in (workdir / "results/logs/map/map_figures.log").read_text()
-    assert "4/4" in (workdir / "results/logs/map/hl0.5.log").read_text()  # progress
+    assert "4/4" in (workdir / "results/logs/map/hl0.5-0.log").read_text()  # progress
 
 
 def test_column_map_from_config(workdir):
@@ -105,7 +122,7 @@ def test_column_map_from_config(workdir):
                                      "labview_en\n")
     (workdir / "odd.yaml").write_text("tests: odd.tsv\ncolumn_maps:\n  labview_en:\n"
                                       "    Elapsed: time\n    Shear force: T\n"
-                                      "    Clamp force: N\n")
+                                      "    Clamp force: N\n" + NO_FIT)
     run = snakemake(workdir, "--cores", "1", "--configfile", "odd.yaml")
     assert run.returncode == 0, run.stderr
     assert read_dataset(workdir / "results/odd/recording.nc")["time"].values.tolist() == [0, 0.01]
@@ -118,7 +135,7 @@ def test_force_only_recording_runs_to_a_page_and_a_summary_row(workdir):
                                                         strict=True))
     (workdir / "raw_data" / "force.csv").write_text("time [s],T [N]\n" + lines)
     (workdir / "force.tsv").write_text("test_id\tcsv\nforce\traw_data/force.csv\n")
-    (workdir / "force.yaml").write_text("tests: force.tsv\n")
+    (workdir / "force.yaml").write_text("tests: force.tsv\n" + NO_FIT)
     run = snakemake(workdir, "--cores", "2", "--configfile", "force.yaml")
     assert run.returncode == 0, run.stderr
     summary = pd.read_csv(workdir / "results/summary.csv").set_index("test_id")
@@ -143,11 +160,11 @@ def test_force_only_recording_runs_to_a_page_and_a_summary_row(workdir):
         ("tests: missing.tsv\n", None, "missing.tsv: campaign table not found"),
         ("tests: t.tsv\ndetection:\n  thresold: 5\n", None,
          "Additional properties are not allowed ('thresold' was unexpected)"),
-        ("tests: t.tsv\n", "test_id\tcsv\tgross_edge_ratio\na\tx.csv\tlots\n",
-         "'lots' does not match"),
+        ("tests: t.tsv\n", "test_id\tcsv\tedge_reference\na\tx.csv\tceiling\n",
+         "'ceiling' does not match"),
     ],
     ids=["bad-channel", "unknown-key", "bad-test-id", "unknown-map", "no-table",
-         "unknown-detection-key", "bad-edge-ratio"],
+         "unknown-detection-key", "bad-edge-reference"],
 )
 def test_wrong_config_fails_before_any_job(workdir, config, table, message):
     (workdir / "bad.yaml").write_text(config)

@@ -12,8 +12,12 @@ import pandas as pd
 from slipwave.errors import ConfigError
 from slipwave.validation import check, read_yaml
 
-OPTIONAL_COLUMNS = ("frames", "columns", "gross_edge_ratio", "fps", "edge_convention",
-                    "height_ratio")
+SETUP_COLUMNS = ("length_mm", "height_mm", "width_mm", "youngs_modulus_mpa", "poisson_ratio",
+                 "normal_load_n", "speed_mm_s", "machine_stiffness_n_mm", "edge_reference")
+"""Columns of a test's configuration for its simulation (slipwave.bench.setup)."""
+
+OPTIONAL_COLUMNS = ("frames", "columns", "fps", "edge_convention", "height_ratio",
+                    *SETUP_COLUMNS)
 """Columns a campaign table may leave out (their cells are then empty)."""
 
 
@@ -162,40 +166,26 @@ def column_pairs(config: Mapping[str, Any], name: str) -> list[str]:
     return [f"{header}={channel}" for header, channel in column_map(config, name).items()]
 
 
-def gross_edge_ratio(config: Mapping[str, Any], test: Mapping[str, str] | pd.Series) -> float:
-    """A test's DG/DD ratio from which a T drop is a gross slip.
+def setup_cells(test: Mapping[str, str] | pd.Series) -> list[str]:
+    """``COLUMN=VALUE`` for each configuration cell a test fills (``slipwave fit --setting``).
 
     Parameters
     ----------
-    config
-        The validated workflow config (``detection.gross_edge_ratio`` filled in).
     test
-        The test's row of the campaign table; its ``gross_edge_ratio`` cell,
-        when not empty, wins over the config's.
+        The test's row of the campaign table.
 
     Returns
     -------
-    float
-        The ratio.
+    list of str
+        One pair per non-empty cell of :data:`SETUP_COLUMNS`, in that order.
 
     Examples
     --------
-    >>> config = {"detection": {"gross_edge_ratio": 0.9}}
-    >>> gross_edge_ratio(config, {"gross_edge_ratio": "1.3"}), gross_edge_ratio(config, {})
-    (1.3, 0.9)
+    >>> setup_cells({"height_mm": "40", "edge_reference": "frame", "width_mm": ""})
+    ['height_mm=40', 'edge_reference=frame']
     """
-    cell = str(test.get("gross_edge_ratio") or "")
-    if not cell:
-        return float(config["detection"]["gross_edge_ratio"])
-    try:
-        ratio = float(cell)
-    except ValueError as err:
-        raise ConfigError(f"test {test.get('test_id', '?')!r}: gross_edge_ratio {cell!r} is "
-                          "not a number") from err
-    if not ratio > 0:
-        raise ConfigError(f"test {test.get('test_id', '?')!r}: gross_edge_ratio {cell!r} must "
-                          "be positive")
-    return ratio
+    return [f"{column}={test.get(column)}" for column in SETUP_COLUMNS
+            if str(test.get(column) or "").strip()]
 
 
 def edge_convention(config: Mapping[str, Any], test: Mapping[str, str] | pd.Series) -> str:
@@ -250,7 +240,6 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
             check(dict(test), dict(schema), source=where)
         try:
             column_map(config, test["columns"])
-            gross_edge_ratio(config, test)
         except ConfigError as err:
             raise ConfigError(f"{where}: {err}") from err
 

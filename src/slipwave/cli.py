@@ -68,10 +68,18 @@ def _detect(args: argparse.Namespace) -> None:
     from slipwave.io import atomic_output, read_dataset, write_dataset
 
     recording = read_dataset(args.recording)
+    ratio = args.gross_edge_ratio
+    if args.simulated is not None:
+        simulated = read_dataset(args.simulated)
+        if "gross_edge_ratio" not in simulated.attrs:
+            raise SlipwaveError(f"{args.simulated}: no gross_edge_ratio: not a recording of "
+                                "'slipwave simulate --fit'")
+        ratio = float(simulated.attrs["gross_edge_ratio"])
+        print(f"gross/partial edge threshold from the simulation: {ratio:.3g}")
     events = detect_events(
         recording, min_drop=args.min_drop, min_jump=args.min_jump, threshold=args.threshold,
         max_spike=args.max_spike, max_duration=args.max_duration,
-        min_fall_rate=args.min_fall_rate, gross_edge_ratio=args.gross_edge_ratio,
+        min_fall_rate=args.min_fall_rate, gross_edge_ratio=ratio,
         edge_convention=args.edge_convention,
     )
     dataset = events_dataset(events, segment_phases(recording, events))
@@ -84,6 +92,96 @@ def _detect(args: argparse.Namespace) -> None:
     _print_warnings(args.recording, events.attrs)
     counts = ", ".join(f"{n} {kind}" for kind, n in wave_counts(events).items())
     print(f"{args.recording} -> {args.output}: {len(events)} events ({counts})")
+
+
+def _setting_pair(text: str) -> tuple[str, str]:
+    key, equals, value = text.partition("=")
+    if not equals or not key:
+        raise argparse.ArgumentTypeError(f"expected COLUMN=VALUE, got {text!r}")
+    return key, value
+
+
+def _fit(args: argparse.Namespace) -> None:
+    import json
+
+    from slipwave.bench.setup import read_test_setup
+    from slipwave.fit import fit_test, measured_events
+    from slipwave.io import atomic_output, read_dataset
+
+    recording = read_dataset(args.recording)
+    cells = {"test_id": args.test_id or str(recording.attrs.get("test_id", "")),
+             **dict(args.setting)}
+    setup = read_test_setup(recording, cells)
+    events = measured_events(recording, edge_convention=args.edge_convention)
+    fit = fit_test(setup, events, laws=args.laws, elements=args.elements,
+                   max_evaluations=args.max_evaluations,
+                   calibration_error=args.load_calibration)
+    seconds = {law: entry.pop("seconds") for law, entry in fit["laws"].items()}
+    with atomic_output(args.output) as temporary:  # (wall times to the log only)
+        temporary.write_text(json.dumps(fit, indent=2), encoding="utf-8")
+    for law, entry in fit["laws"].items():
+        values = ", ".join(f"{name} {p['value']:.4g} [{p['low']:.4g}, {p['high']:.4g}]"
+                           for name, p in entry["parameters"].items())
+        print(f"{law}: {values}; misfit {entry['misfit']:.1f} over {entry['features']} "
+              f"features, AIC {entry['aic']:.1f}{' (rejected)' if entry['rejected'] else ''}, "
+              f"{entry['evaluations']} simulations in {seconds[law]:.0f} s")
+    print(f"{args.recording} -> {args.output}: {fit['chosen']}")
+
+
+def _compare(args: argparse.Namespace) -> None:
+    import json
+
+    import xarray as xr
+
+    from slipwave.compare import compare_test, place_on_map, verdict_counts
+    from slipwave.events import events_table
+    from slipwave.fit import read_fit
+    from slipwave.io import atomic_output, read_dataset
+
+    events_ds = read_dataset(args.events)
+    measured = events_table(events_ds)
+    fit = read_fit(args.fit)
+    waves = None
+    if args.waves is not None:
+        import pandas as pd
+        waves = pd.read_csv(args.waves)
+    table = compare_test(measured, read_dataset(args.simulated),
+                         read_dataset(args.steps) if args.steps else None, waves,
+                         min_drop=float(events_ds.attrs.get("min_drop", float("nan")))
+                         if "min_drop" in events_ds.attrs else None)
+    summary: dict[str, Any] = {"test_id": fit["test_id"], "law": fit["chosen"],
+                               "parameters": fit["parameters"],
+                               "verdicts": verdict_counts(table)}
+    if args.map is not None:
+        setup = fit["setup"]
+        ratio = setup["height_mm"]["value"] / setup["length_mm"]["value"]
+        with xr.open_dataset(args.map) as behaviour_map:
+            summary["map"] = place_on_map(behaviour_map.load(), ratio, fit["parameters"]["fs"])
+    with atomic_output(args.output) as temporary:
+        table.to_csv(temporary, index=False, float_format="%.6g")
+    if args.json is not None:
+        with atomic_output(args.json) as temporary:
+            temporary.write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    if args.simulated_events is not None:
+        with atomic_output(args.simulated_events) as temporary:
+            table.attrs["simulated_events"].to_csv(temporary, index=False, float_format="%.6g")
+    counts = ", ".join(f"{n} {verdict}" for verdict, n in summary["verdicts"].items())
+    print(f"{args.events} vs {args.simulated} -> {args.output}: {counts}")
+
+
+def _fits(args: argparse.Namespace) -> None:
+    from slipwave.fit import fits_table, read_fit
+    from slipwave.io import atomic_output
+
+    table = fits_table([read_fit(str(path)) for path in args.fits])
+    with atomic_output(args.output) as temporary:
+        table.to_csv(temporary, index=False, float_format="%.6g")
+    if args.plot is not None:
+        from slipwave.plot import plot_fits
+        with atomic_output(args.plot) as temporary:
+            plot_fits(table).savefig(temporary, format=args.plot.suffix.lstrip(".") or "png",
+                                     dpi=150, bbox_inches="tight")
+    print(f"{len(table)} tests -> {args.output}")
 
 
 def _summary(args: argparse.Namespace) -> None:
@@ -143,24 +241,73 @@ def _waves(args: argparse.Namespace) -> None:
 
 
 def _report(args: argparse.Namespace) -> None:
+    import json
+
+    import pandas as pd
+
     from slipwave.io import read_dataset
-    from slipwave.report import video_summary, write_test_page
+    from slipwave.report import pairing_summary, video_summary, write_test_page
+    from slipwave.video import ClockFit
 
     events = None if args.events is None else read_dataset(args.events)
+    recording = read_dataset(args.recording)
     video = None
+    kymo = clock = None
     if args.kymograph is not None:
-        import pandas as pd
-
-        from slipwave.video import ClockFit
-
         if args.waves is None or args.clock is None:
             raise SlipwaveError("--kymograph needs --waves and --clock")
         fused = None if args.fused is None else pd.read_csv(args.fused)
-        video = video_summary(read_dataset(args.kymograph), pd.read_csv(args.waves),
-                              ClockFit.from_json(args.clock.read_text()), args.frames, events,
-                              fused)
-    write_test_page(read_dataset(args.recording), args.output, events, video)
-    print(f"{args.recording} -> {args.output}")
+        kymo = read_dataset(args.kymograph)
+        clock = ClockFit.from_json(args.clock.read_text())
+        video = video_summary(kymo, pd.read_csv(args.waves), clock, args.frames, events, fused)
+    pairing = None
+    if args.fit is not None or args.simulated is not None:
+        from slipwave.fit import read_fit
+
+        compared = (json.loads(args.comparison_json.read_text())
+                    if args.comparison_json is not None else {})
+        behaviour_map = None
+        if args.map is not None:
+            import xarray as xr
+
+            with xr.open_dataset(args.map) as opened:
+                behaviour_map = opened.load()
+        pairing = pairing_summary(
+            recording, events,
+            fit=None if args.fit is None else read_fit(str(args.fit)),
+            comparison=None if args.comparison is None else pd.read_csv(args.comparison),
+            simulated=None if args.simulated is None else read_dataset(args.simulated),
+            simulated_events=(None if args.simulated_events is None
+                              else pd.read_csv(args.simulated_events)),
+            contact=None if args.contact is None else read_dataset(args.contact),
+            placement=compared.get("map"), behaviour_map=behaviour_map, kymo=kymo, clock=clock)
+    write_test_page(recording, args.output, events, video, pairing, pdf=args.pdf)
+    print(f"{args.recording} -> {args.output}" + (f", {args.pdf}" if args.pdf else ""))
+
+
+def _report_campaign(args: argparse.Namespace) -> None:
+    import json
+
+    import pandas as pd
+
+    from slipwave.report import campaign_summary, write_campaign_report
+
+    comparisons = {}
+    for path in args.comparisons:
+        content = json.loads(Path(path).read_text())
+        comparisons[str(content["test_id"])] = content
+    behaviour_map = None
+    if args.map is not None:
+        import xarray as xr
+
+        with xr.open_dataset(args.map) as opened:
+            behaviour_map = opened.load()
+    content = campaign_summary(pd.read_csv(args.summary),
+                               None if args.fits is None else pd.read_csv(args.fits),
+                               comparisons, behaviour_map)
+    write_campaign_report(content, args.output, pdf=args.pdf, title=args.title)
+    print(f"{len(content['tests'])} tests -> {args.output}" + (f", {args.pdf}" if args.pdf
+                                                               else ""))
 
 
 def _simulate(args: argparse.Namespace) -> None:
@@ -170,6 +317,11 @@ def _simulate(args: argparse.Namespace) -> None:
     from slipwave.solver import Coulomb, LoadPath, Slab, condense, describe_behaviour, simulate
     from slipwave.solver.slab import condensation_memory
 
+    if args.fit is not None:
+        _simulate_test(args)
+        return
+    if args.fs is None:
+        raise SlipwaveError("simulate needs --fs (or --fit, to simulate a test)")
     slab = Slab(length=args.length, height=args.height, width=args.width,
                 youngs_modulus=args.youngs_modulus, poisson_ratio=args.poisson_ratio,
                 elements=args.elements, holder=args.holder)
@@ -194,15 +346,43 @@ def _simulate(args: argparse.Namespace) -> None:
           f"behaviour: {behaviour.text}")
 
 
+def _simulate_test(args: argparse.Namespace) -> None:
+    from slipwave.bench.replay import replay_test
+    from slipwave.bench.setup import TestSetup
+    from slipwave.fit import chosen_law, read_fit
+    from slipwave.io import write_dataset
+
+    fit = read_fit(str(args.fit))
+    setup = TestSetup.from_dict(fit["setup"])
+    replay = replay_test(setup, chosen_law(fit), elements=int(fit["elements"]),
+                         sample_rate=args.sample_rate, kymograph=args.contact is not None)
+    write_dataset(replay.recording, args.output)
+    if args.contact is not None:
+        write_dataset(replay.contact, args.contact)
+    if args.steps is not None:
+        # the nodal displacements are the bulk of it, and the contact history has them
+        steps = replay.simulation.drop_vars(["ux", "uy", "ux_before_wave", "uy_before_wave"])
+        write_dataset(steps, args.steps)
+    print(f"{args.fit} -> {args.output}: {fit['chosen']} "
+          f"{', '.join(f'{k} {v:.4g}' for k, v in fit['parameters'].items())}, "
+          f"{replay.simulation.sizes['step']} steps, gross/partial edge threshold "
+          f"{replay.recording.attrs['gross_edge_ratio']:.3g}")
+
+
 def _map_row(args: argparse.Namespace) -> None:
     from tqdm import tqdm
 
     from slipwave.cache import DiskCache
     from slipwave.io import write_dataset
-    from slipwave.map import friction_grid, map_row
-    from slipwave.solver import LoadPath
+    from slipwave.map import friction_grid, map_row, shard
+    from slipwave.resources import require_memory
+    from slipwave.solver import LoadPath, Slab
+    from slipwave.solver.slab import condensation_memory
 
-    frictions = friction_grid(*args.frictions)
+    frictions = shard(friction_grid(*args.frictions), args.shard, args.shard_size)
+    slab = Slab(height=args.height_ratio * default.CONTACT_LENGTH_MM, elements=args.elements)
+    require_memory(condensation_memory(slab), f"the map's row at H/L {args.height_ratio:g} "
+                   f"({args.elements} elements)", limit_gb=args.memory_limit)
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
                     normal_control=args.normal_control,
                     normal_friction=args.normal_friction == "on")
@@ -211,10 +391,12 @@ def _map_row(args: argparse.Namespace) -> None:
         row = map_row(args.height_ratio, frictions, elements=args.elements, path=path,
                       min_size=args.min_zone, store=DiskCache(),
                       progress=lambda done, total: bar.update(1))
-    write_dataset(row, args.output)
     seconds = row["seconds"].values
+    condensation = row.attrs.pop("condensation_s")
+    # wall times go to the log, not the map: the map is the same on any machine
+    write_dataset(row.drop_vars("seconds"), args.output)
     print(f"H/L {args.height_ratio:g}: {frictions.size} cases in {seconds.sum():.1f} s "
-          f"(mean {1000 * seconds.mean():.1f} ms, condensation {row.attrs['condensation_s']} s), "
+          f"(mean {1000 * seconds.mean():.1f} ms, condensation {condensation} s), "
           f"largest residual {float(row['max_residual'].max()):.2g} -> {args.output}")
 
 
@@ -231,8 +413,7 @@ def _map_assemble(args: argparse.Namespace) -> None:
     failed = int((whole["end"].values != "gross sliding").sum())
     print(f"{whole['behaviour'].size} cases, {whole.sizes['behaviour_id']} behaviours, "
           f"{failed} without gross sliding, largest residual "
-          f"{float(whole['max_residual'].max()):.2g}, mean "
-          f"{1000 * float(whole['seconds'].mean()):.1f} ms per case -> {args.output}")
+          f"{float(whole['max_residual'].max()):.2g} -> {args.output}")
 
 
 def _map_figures(args: argparse.Namespace) -> None:
@@ -339,7 +520,34 @@ def build_parser() -> argparse.ArgumentParser:
                         help="events with their waves, CSV of 'slipwave waves --fused'")
     report.add_argument("--frames", type=Path, default=None,
                         help="the video (or image folder) for frames around the first gross slip")
+    report.add_argument("--fit", type=Path, default=None, help="fit.json of 'slipwave fit'")
+    report.add_argument("--comparison", type=Path, default=None,
+                        help="comparison CSV of 'slipwave compare'")
+    report.add_argument("--comparison-json", type=Path, default=None,
+                        help="comparison JSON of 'slipwave compare --json' (place on the map)")
+    report.add_argument("--simulated", type=Path, default=None,
+                        help="simulated recording of 'slipwave simulate --fit'")
+    report.add_argument("--simulated-events", type=Path, default=None,
+                        help="simulated events CSV of 'slipwave compare'")
+    report.add_argument("--contact", type=Path, default=None,
+                        help="simulated contact history of 'slipwave simulate --contact'")
+    report.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
+    report.add_argument("--pdf", type=Path, default=None, help="also print the page to PDF")
     report.set_defaults(run=_report)
+
+    campaign_report = commands.add_parser(
+        "report-campaign", help="write the campaign report (HTML, PDF) over every test")
+    campaign_report.add_argument("--summary", type=Path, required=True,
+                                 help="summary CSV of 'slipwave summary'")
+    campaign_report.add_argument("--fits", type=Path, default=None,
+                                 help="fits CSV of 'slipwave fits'")
+    campaign_report.add_argument("--comparisons", type=Path, nargs="*", default=[],
+                                 help="comparison JSON files of 'slipwave compare --json'")
+    campaign_report.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
+    campaign_report.add_argument("--title", default="Campaign", help="the report's title")
+    campaign_report.add_argument("-o", "--output", type=Path, required=True, help="HTML")
+    campaign_report.add_argument("--pdf", type=Path, default=None, help="also write a PDF")
+    campaign_report.set_defaults(run=_report_campaign)
 
     sim = commands.add_parser(
         "simulate", help="simulate a bench test with the frictional contact solver",
@@ -359,7 +567,17 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
                      help="elements along the contact (%(default)s)")
     sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
-    sim.add_argument("--fs", type=float, required=True, help="static friction coefficient")
+    sim.add_argument("--fs", type=float, default=None,
+                     help="static friction coefficient (required without --fit)")
+    sim.add_argument("--fit", type=Path, default=None,
+                     help="simulate a test: its fit.json from 'slipwave fit' (its setup, its "
+                     "chosen law and mesh); -o then writes the simulated recording")
+    sim.add_argument("--contact", type=Path, default=None,
+                     help="with --fit: also write the zone history and simulated kymograph")
+    sim.add_argument("--steps", type=Path, default=None,
+                     help="with --fit: also write the solver's steps")
+    sim.add_argument("--sample-rate", type=_positive_float, default=100.0,
+                     help="with --fit: sampling rate of the simulated recording, Hz")
     sim.add_argument("--fd", type=float, default=None, help="dynamic coefficient (fs)")
     _load_path_arguments(sim, normal_control="displacement", normal_friction="on")
     sim.add_argument("--max-travel", type=float, default=None,
@@ -389,6 +607,13 @@ def build_parser() -> argparse.ArgumentParser:
                      "(%(default)s)")
     row.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
                      help="elements along the contact (%(default)s)")
+    row.add_argument("--shard", type=int, default=0,
+                     help="which run of --shard-size coefficients of the row, from 0")
+    row.add_argument("--shard-size", type=int, default=0,
+                     help="coefficients per shard; 0: the whole row (%(default)s)")
+    row.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
+                     help="refuse a slab whose condensation would need more (default: "
+                     "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     _load_path_arguments(row, normal_control=default.MAP_NORMAL_CONTROL,
                          normal_friction="on" if default.MAP_NORMAL_FRICTION else "off")
     row.add_argument("--min-zone", type=_positive_float, default=default.MIN_ZONE_MM,
@@ -454,11 +679,63 @@ def build_parser() -> argparse.ArgumentParser:
                         "(%(default)s)")
     detect.add_argument("--gross-edge-ratio", type=float, default=default.GROSS_EDGE_RATIO,
                         help="DG jump / DD jump from which a drop is a gross slip (%(default)s)")
+    detect.add_argument("--simulated", type=Path, default=None,
+                        help="the test's simulated recording ('slipwave simulate --fit'): its "
+                        "gross_edge_ratio, read off the simulated slips, replaces "
+                        "--gross-edge-ratio")
     detect.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
                         default=default.EDGE_CONVENTION,
                         help="how the edge sensors read: both along +x, each its edge's outward "
                         "displacement, or found from the data (%(default)s)")
     detect.set_defaults(run=_detect)
+
+    fit = commands.add_parser(
+        "fit", help="fit friction laws to a test through the solver",
+        description="Read the test's configuration from its recording and the campaign "
+        "table's cells, then fit each friction law on the slip events (T/|N| at gross "
+        "slips, their times, slip counts) with 95 %% intervals, and choose by AIC.")
+    fit.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
+    fit.add_argument("-o", "--output", type=Path, required=True, help="fit.json to write")
+    fit.add_argument("--test-id", default=None, help="test id (default: the recording's)")
+    fit.add_argument("--setting", type=_setting_pair, nargs="*", default=[],
+                     metavar="COLUMN=VALUE", help="the campaign table's cells (length_mm, "
+                     "height_mm, width_mm, youngs_modulus_mpa, poisson_ratio, normal_load_n, "
+                     "speed_mm_s, machine_stiffness_n_mm, edge_reference)")
+    fit.add_argument("--laws", nargs="+", default=list(default.FIT_LAWS),
+                     choices=list(default.FIT_LAWS), help="laws to fit (%(default)s)")
+    fit.add_argument("--elements", type=int, default=default.FIT_ELEMENTS,
+                     help="elements along the contact (%(default)s)")
+    fit.add_argument("--max-evaluations", type=int, default=default.FIT_MAX_EVALUATIONS,
+                     help="simulations of each law's local search (%(default)s)")
+    fit.add_argument("--load-calibration", type=float, default=default.LOAD_CALIBRATION,
+                     help="relative calibration uncertainty of each load cell (%(default)s)")
+    fit.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
+                     default=default.EDGE_CONVENTION, help="as for detect (%(default)s)")
+    fit.set_defaults(run=_fit)
+
+    compare = commands.add_parser(
+        "compare", help="a test's measurement against its simulation, feature by feature")
+    compare.add_argument("events", type=Path, help="events netCDF of 'slipwave detect'")
+    compare.add_argument("--simulated", type=Path, required=True,
+                         help="simulated recording of 'slipwave simulate --fit'")
+    compare.add_argument("--steps", type=Path, default=None,
+                         help="the solver's steps ('slipwave simulate --steps')")
+    compare.add_argument("--fit", type=Path, required=True, help="fit.json")
+    compare.add_argument("--waves", type=Path, default=None, help="waves CSV of the video")
+    compare.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
+    compare.add_argument("-o", "--output", type=Path, required=True, help="comparison CSV")
+    compare.add_argument("--json", type=Path, default=None,
+                         help="also write the verdict counts and the place on the map")
+    compare.add_argument("--simulated-events", type=Path, default=None,
+                         help="also write the simulated recording's events (CSV)")
+    compare.set_defaults(run=_compare)
+
+    fits = commands.add_parser("fits", help="the campaign's fits in one table")
+    fits.add_argument("fits", type=Path, nargs="+", help="fit.json files")
+    fits.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
+    fits.add_argument("--plot", type=Path, default=None,
+                      help="also draw T/|N| and the fitted coefficients against H/L")
+    fits.set_defaults(run=_fits)
 
     summary = commands.add_parser(
         "summary", help="one row per test: T/|N| at gross slips, wave counts, phases",

@@ -63,3 +63,13 @@ BAND_MM = (0.5, 2.0)
 """Band of the kymograph, mm above the interface (low, high)."""
 PAIRING_TOLERANCE_S = 0.3
 """Largest gap between a wave's start and a load event's onset that pairs them, s."""
+
+# The fit of friction laws (slipwave.fit; config section ``fit``).
+FIT_LAWS = ("coulomb", "run-in", "slip-weakening")
+"""The laws each test is fitted with."""
+FIT_ELEMENTS = 80
+"""Elements along the contact in the fit's simulations (and the test's simulation)."""
+FIT_MAX_EVALUATIONS = 20
+"""Simulations of each law's local search, after its starting scan."""
+LOAD_CALIBRATION = 0.005
+"""Relative calibration uncertainty of each load cell (T and N), one standard deviation."""

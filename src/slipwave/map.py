@@ -184,7 +184,8 @@ def assemble_map(rows: Sequence[xr.Dataset]) -> xr.Dataset:
     Parameters
     ----------
     rows
-        From :func:`map_row`, any H/L order.
+        From :func:`map_row`, any H/L order; a row may come in shards (parts of its f
+        range, :func:`shard`), joined along f first.
 
     Returns
     -------
@@ -192,7 +193,8 @@ def assemble_map(rows: Sequence[xr.Dataset]) -> xr.Dataset:
         ``height_ratio`` x ``friction``: ``behaviour`` (number), ``sequence``,
         ``paper_name``, ``L``, ``first_opening``, ``first_opening_x``,
         ``first_slip``, ``first_slip_x``, ``end``, ``ratio_at_gross``, ``steps``,
-        ``max_residual``, ``seconds``; and along ``behaviour_id``: ``behaviours``
+        ``max_residual`` (``seconds`` too, when the rows kept it); and along
+        ``behaviour_id``: ``behaviours``
         (the succession), ``behaviour_name``, ``cases``. A behaviour whose slip
         zone leading to gross sliding is the paper's ZD (or ZG) is named ``ZD``
         for the most frequent such succession and ``ZD-b``, ``ZD-c``... for the
@@ -201,8 +203,19 @@ def assemble_map(rows: Sequence[xr.Dataset]) -> xr.Dataset:
     """
     if not rows:
         raise SlipwaveError("no map rows to assemble")
-    whole = xr.concat(sorted(rows, key=lambda r: float(r["height_ratio"][0])),
-                      dim="height_ratio", combine_attrs="drop_conflicts")
+    # shards of one H/L first (along f), then the H/L: the same map whatever the sharding
+    by_ratio: dict[float, list[xr.Dataset]] = {}
+    for piece in rows:
+        by_ratio.setdefault(float(piece["height_ratio"][0]), []).append(piece)
+    joined = []
+    for ratio in sorted(by_ratio):
+        pieces = sorted(by_ratio[ratio], key=lambda p: float(p["friction"][0]))
+        frictions = np.concatenate([p["friction"].values for p in pieces])
+        if np.unique(frictions).size != frictions.size:
+            raise SlipwaveError(f"map rows of H/L {ratio:g} overlap in f")
+        joined.append(xr.concat(pieces, dim="friction", combine_attrs="drop_conflicts")
+                      if len(pieces) > 1 else pieces[0])
+    whole = xr.concat(joined, dim="height_ratio", combine_attrs="drop_conflicts")
     counts = Counter(str(s) for s in whole["sequence"].values.ravel())
     order = sorted(counts, key=lambda s: (-counts[s], s))
     number = {s: k + 1 for k, s in enumerate(order)}
@@ -299,6 +312,65 @@ def contiguity(whole: xr.Dataset) -> float:
     return float(same.mean())
 
 
+
+
+def shard(frictions: np.ndarray, index: int, size: int) -> np.ndarray:
+    """The ``index``-th run of ``size`` coefficients of a row (0: the whole row).
+
+    Parameters
+    ----------
+    frictions
+        The row's coefficients (:func:`friction_grid`).
+    index
+        Which shard, from 0.
+    size
+        Coefficients per shard; 0: one shard, the whole row.
+
+    Returns
+    -------
+    numpy.ndarray
+        The shard's coefficients.
+
+    Raises
+    ------
+    SlipwaveError
+        If the shard lies beyond the row.
+
+    Examples
+    --------
+    >>> shard(friction_grid(0.1, 1.4, 0.01), 2, 50)[[0, -1]].tolist()
+    [1.1, 1.4]
+    """
+    if size <= 0:
+        return frictions
+    part = frictions[index * size:(index + 1) * size]
+    if index < 0 or not part.size:
+        raise SlipwaveError(f"shard {index} of {size} coefficients lies beyond the row's "
+                            f"{frictions.size}")
+    return part
+
+
+def shard_count(frictions: np.ndarray, size: int) -> int:
+    """How many shards of ``size`` coefficients a row makes (1 for ``size`` 0).
+
+    Parameters
+    ----------
+    frictions
+        The row's coefficients.
+    size
+        Coefficients per shard; 0: the whole row.
+
+    Returns
+    -------
+    int
+        The number of shards.
+
+    Examples
+    --------
+    >>> shard_count(friction_grid(0.1, 1.4, 0.01), 50)
+    3
+    """
+    return 1 if size <= 0 else -(-frictions.size // size)
 
 
 def friction_grid(start: float, stop: float, step: float) -> np.ndarray:

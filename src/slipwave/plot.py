@@ -239,7 +239,8 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
     return fig
 
 
-def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
+def plot_frames(images: list[np.ndarray], times: list[float],
+                labels: list[str] | None = None) -> Figure:
     """A row of frames with their times.
 
     Parameters
@@ -248,6 +249,8 @@ def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
         The frames (grey, 8 or 16 bit).
     times
         Their camera times, s.
+    labels
+        What each frame shows, above its time; ``None``: the times alone.
 
     Returns
     -------
@@ -255,11 +258,13 @@ def plot_frames(images: list[np.ndarray], times: list[float]) -> Figure:
         The frames in a row, each titled with its time.
 
     """
-    fig = Figure(figsize=(2.2 * len(images), 1.6), layout="constrained")
+    fig = Figure(figsize=(2.2 * len(images), 1.6 if labels is None else 1.9),
+                 layout="constrained")
     axes = fig.subplots(1, len(images), squeeze=False)
-    for ax, image, time in zip(axes[0], images, times, strict=True):
+    for k, (ax, image, time) in enumerate(zip(axes[0], images, times, strict=True)):
         ax.imshow(image, cmap="gray", vmin=0, vmax=np.iinfo(image.dtype).max)
-        ax.set_title(f"{time:.2f} s", fontsize=8)
+        title = f"{time:.2f} s" if labels is None else f"{labels[k]}\n{time:.2f} s"
+        ax.set_title(title, fontsize=8)
         ax.axis("off")
     return fig
 
@@ -321,7 +326,8 @@ def plot_zone_histories(cases: list[tuple[str, xr.Dataset]], *, columns: int = 4
     return fig
 
 
-def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
+def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None, *,
+             label: str = "campaign tests (T/N at gross slips)") -> Figure:
     """The behaviour map (the paper's figure 2): f upwards, H/L across.
 
     Each case is coloured by its behaviour (legend in words below the map), the
@@ -336,6 +342,8 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
         From :func:`slipwave.map.assemble_map`.
     tests
         The campaign's tests, or ``None``.
+    label
+        The tests' legend entry (what their f is).
 
     Returns
     -------
@@ -392,7 +400,7 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
         ax.errorbar(tests["height_ratio"], tests["ratio"],
                     yerr=[tests["ratio"] - tests["ci_low"], tests["ci_high"] - tests["ratio"]],
                     fmt="o", color="black", mfc="white", ms=6, capsize=3,
-                    label="campaign tests (T/N at gross slips)")
+                    label=label)
         for _, test in tests.iterrows():
             ax.annotate(str(test["test_id"]), (test["height_ratio"], test["ratio"]),
                         xytext=(6, 4), textcoords="offset points", fontsize=8)
@@ -418,3 +426,345 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None) -> Figure:
 
 def _family(name: str) -> str:
     return name[:2] if name.startswith(("ZD", "ZG")) else ""
+
+
+def plot_fits(table: pd.DataFrame) -> Figure:
+    """The campaign's fitted coefficients against H/L, with their 95 % intervals.
+
+    Parameters
+    ----------
+    table
+        From :func:`slipwave.fit.fits_table`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        fs and fd of each test's chosen law against H/L, labelled by test.
+
+    """
+    figure = Figure(figsize=(6.4, 4.0), layout="constrained")
+    axes = figure.subplots()
+    for name, colour, label in (("fs", "#b2182b", "static fs"), ("fd", "#2166ac", "dynamic fd")):
+        low = table[name] - table[f"{name}_low"]
+        high = table[f"{name}_high"] - table[name]
+        axes.errorbar(table["height_ratio"], table[name], yerr=[low, high], fmt="o",
+                      color=colour, capsize=3, label=label)
+    for _, row in table.iterrows():
+        axes.annotate(f"{row['test_id']} ({row['law']})", (row["height_ratio"], row["fs"]),
+                      textcoords="offset points", xytext=(5, 5), fontsize=8)
+    axes.set_xlabel("H/L")
+    axes.set_ylabel("fitted coefficient (1)")
+    axes.set_title("Fitted friction (chosen law; 95 % intervals)")
+    axes.legend()
+    axes.grid(alpha=0.3)
+    return figure
+
+
+MEASURED_STYLE = {"lw": 0.8}
+SIMULATED_STYLE = {"lw": 1.0, "color": "#222222", "ls": "--"}
+"""How measured (coloured, solid) and simulated (black, dashed) curves are told apart in
+every comparison figure."""
+
+
+def _along_x(recording: xr.Dataset, events: xr.Dataset | None) -> xr.Dataset:
+    """DG along +x (the left sensor turned when it reads its edge's outward motion)."""
+    if events is not None and str(events.attrs.get("edge_convention")) == "outward" and (
+            "DG" in recording):
+        recording = recording.assign(DG=-recording["DG"])
+        recording["DG"].attrs["long_name"] = "left edge displacement, along +x"
+    return recording
+
+
+def plot_pairing(recording: xr.Dataset, simulated: xr.Dataset, events: xr.Dataset | None = None,
+                 simulated_events: pd.DataFrame | None = None) -> Figure:
+    """Measured and simulated T, N, DG, DD and T/|N| on shared time axes.
+
+    Measured in colour, simulated dashed black; the measured phases shaded (partial
+    slips green, gross slips red, normal loading grey) and every slip's onset marked on
+    T, measured (filled) and simulated (hollow). DG is drawn along +x.
+
+    Parameters
+    ----------
+    recording
+        The measured recording.
+    simulated
+        The simulated recording (:func:`slipwave.bench.replay.replay_test`).
+    events
+        The measured ``events.nc``, or ``None``.
+    simulated_events
+        The simulated recording's events, or ``None``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per channel present in both, and T/|N|.
+
+    """
+    recording = _along_x(recording, events)
+    panels = [c for c in ("T", "N", "DG", "DD") if c in recording and c in simulated]
+    rows = len(panels) + ("N" in panels)
+    with sns.axes_style("whitegrid"):
+        fig = Figure(figsize=(9.0, 1.55 * rows + 0.8), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(rows, 1, sharex=True))
+    colours = dict(zip(panels, sns.color_palette("deep", 5), strict=False))
+    series = [(name, recording[name], simulated[name]) for name in panels]
+    if "N" in panels:
+        series.append(("T/|N|", load_ratio(recording), load_ratio(simulated)))
+        colours["T/|N|"] = sns.color_palette("deep", 5)[4]
+    for ax, (name, measured, model) in zip(axes, series, strict=True):
+        ax.plot(measured["time"], measured.values, color=colours[name], label="measured",
+                **MEASURED_STYLE)
+        ax.plot(model["time"], model.values, label="simulated", **SIMULATED_STYLE)
+        unit = measured.attrs.get("units", "1") if name != "T/|N|" else "-"
+        ax.set_ylabel(f"{name} [{unit}]")
+    if events is not None:
+        runs = _phase_runs(events["phase"])
+        for ax in axes:
+            for label, start, end in runs:
+                ax.axvspan(start, end, color=PHASE_COLOURS[label], alpha=0.3, lw=0)
+        if "T" in panels:
+            kinds = events["kind"].values.astype(str)
+            for kind, (marker, colour) in KIND_MARKERS.items():
+                chosen = kinds == kind
+                if chosen.any():
+                    axes[0].plot(events["t_start"].values[chosen],
+                                 events["T_before"].values[chosen], marker, color=colour, ms=4,
+                                 label=f"{kind.replace('_', ' ')} (measured)")
+    if simulated_events is not None and len(simulated_events) and "T" in panels:
+        for kind, (marker, colour) in KIND_MARKERS.items():
+            chosen = simulated_events[simulated_events["kind"] == kind]
+            if len(chosen):
+                axes[0].plot(chosen["t_start"], chosen["T_before"], marker, mfc="none",
+                             color=colour, ms=6, label=f"{kind.replace('_', ' ')} (simulated)")
+    axes[0].legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=6,
+                   frameon=False)
+    axes[-1].set_xlabel("time [s]")
+    return fig
+
+
+def plot_gross_zooms(recording: xr.Dataset, simulated: xr.Dataset, events: xr.Dataset,
+                     simulated_events: pd.DataFrame | None, *, count: int = 3,
+                     before: float = 3.0, after: float = 3.0) -> Figure | None:
+    """The first gross slips up close: T, DG and DD around each onset, measured and simulated.
+
+    Each column is one of the first ``count`` measured gross slips; the simulated
+    gross slip of the same rank is drawn on the same axes, shifted to the measured
+    onset (its own time difference is in the title). Time runs from the onset.
+
+    Parameters
+    ----------
+    recording, simulated, events, simulated_events
+        As in :func:`plot_pairing`.
+    count
+        Gross slips shown.
+    before, after
+        Seconds shown before and after each onset.
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+        ``None`` without a measured gross slip.
+
+    """
+    recording = _along_x(recording, events)
+    kinds = events["kind"].values.astype(str)
+    onsets = events["t_start"].values[kinds == "gross_slip"][:count]
+    if not onsets.size:
+        return None
+    model_onsets = np.array([])
+    if simulated_events is not None and len(simulated_events):
+        model_onsets = simulated_events.loc[simulated_events["kind"] == "gross_slip",
+                                            "t_start"].to_numpy()
+    panels = [c for c in ("T", "DG", "DD") if c in recording]
+    with sns.axes_style("whitegrid"):
+        fig = Figure(figsize=(9.0, 1.5 * len(panels) + 0.9), layout="constrained")
+        axes = fig.subplots(len(panels), onsets.size, sharex=True, squeeze=False)
+    colours = dict(zip(("T", "N", "DG", "DD"), sns.color_palette("deep", 4), strict=True))
+    for column, onset in enumerate(onsets):
+        shift = model_onsets[column] - onset if column < model_onsets.size else np.nan
+        for row, name in enumerate(panels):
+            ax = axes[row, column]
+            window = recording[name].sel(time=slice(onset - before, onset + after))
+            ax.plot(window["time"] - onset, window.values, color=colours[name],
+                    label="measured", **MEASURED_STYLE)
+            if np.isfinite(shift) and name in simulated:
+                model = simulated[name].sel(time=slice(onset + shift - before,
+                                                       onset + shift + after))
+                # the same level before the slip: sensor offsets and drift are not modelled
+                level = float(window.sel(time=slice(None, onset)).mean()) - float(
+                    model.sel(time=slice(None, onset + shift)).mean())
+                ax.plot(model["time"] - onset - shift, model.values + level,
+                        label="simulated", **SIMULATED_STYLE)
+            ax.axvline(0.0, color=KIND_MARKERS["gross_slip"][1], lw=0.6)
+            if column == 0:
+                ax.set_ylabel(f"{name} [{recording[name].attrs.get('units', '?')}]")
+            if row == 0:
+                title = f"gross slip {column + 1}, {onset:.1f} s"
+                if np.isfinite(shift):
+                    title += f"\n(simulated {shift:+.1f} s)"
+                ax.set_title(title, fontsize=8)
+        axes[-1, column].set_xlabel("time from the onset [s]")
+    axes[0, 0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("First gross slips (DG, DD along +x; simulated levelled to the measured "
+                 "before the slip)", fontsize=9)
+    return fig
+
+
+def plot_space_time(contact: xr.Dataset | None, kymo: xr.Dataset | None = None,
+                    card_time: tuple[float, float] = (0.0, 1.0),
+                    window: tuple[float, float] | None = None) -> Figure:
+    """The video's kymograph, the simulated zones and the simulated kymograph, one time axis.
+
+    Parameters
+    ----------
+    contact
+        The simulated contact history (``state``, ``intensity``), or ``None``.
+    kymo
+        The video's kymograph, or ``None``.
+    card_time
+        (offset, rate) turning the camera's time into the card's (``clock.json``).
+    window
+        (first, last) card time shown, s; ``None``: all.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Up to three panels: x along the contact upwards, card time across.
+
+    """
+    panels = []
+    if kymo is not None:
+        panels.append("video")
+    if contact is not None:
+        panels.append("zones")
+        if "intensity" in contact:
+            panels.append("simulated")
+    if not panels:
+        raise SlipwaveError("no kymograph and no simulation to draw")
+    fig = Figure(figsize=(9.0, 1.9 * len(panels) + 0.7), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(len(panels), 1, sharex=True))
+    for ax, panel in zip(axes, panels, strict=True):
+        if panel == "video":
+            assert kymo is not None
+            time = card_time[0] + card_time[1] * kymo["time"].values
+            values = kymo["intensity"].values
+            x = kymo["x"].values
+            ax.set_title("video: intensity of the band above the interface", fontsize=9,
+                         loc="left")
+            ax.imshow(values.T, aspect="auto", origin="lower", cmap="gray",
+                      extent=(time[0], time[-1], x[0], x[-1]), interpolation="nearest")
+        elif panel == "zones":
+            assert contact is not None
+            time, x = contact["time"].values, contact["x"].values
+            colours = ListedColormap(list(ZONE_COLOURS.values()))
+            ax.pcolormesh(np.concatenate([[0.0], time]), _edges(x),
+                          contact["state"].values[:, :].T, cmap=colours, vmin=-0.5, vmax=2.5)
+            ax.set_title("simulation: zone state of the contact", fontsize=9, loc="left")
+            ax.legend(handles=[Patch(color=c, label=k, ec="#999999")
+                               for k, c in ZONE_COLOURS.items()], fontsize=7,
+                      loc="upper right", ncols=3)
+        else:
+            assert contact is not None
+            time, x = contact["time"].values, contact["x_image"].values
+            ax.pcolormesh(np.concatenate([[0.0], time]), _edges(x),
+                          contact["intensity"].values.T, cmap="gray", vmin=0, vmax=255)
+            ax.set_title("simulation: intensity of the same band (camera model)", fontsize=9,
+                         loc="left")
+        ax.set_ylabel("x [mm]")
+    if window is not None:
+        axes[-1].set_xlim(*window)
+    axes[-1].set_xlabel("time (card) [s]")
+    return fig
+
+
+def _edges(centres: np.ndarray) -> np.ndarray:
+    middle = 0.5 * (centres[1:] + centres[:-1])
+    return np.concatenate([[2 * centres[0] - middle[0]], middle,
+                           [2 * centres[-1] - middle[-1]]])
+
+
+def plot_gross_ratios(events: pd.DataFrame, simulated_events: pd.DataFrame | None) -> Figure:
+    """T/|N| before and after each gross slip, measured and simulated, by rank.
+
+    Parameters
+    ----------
+    events
+        The measured events table.
+    simulated_events
+        The simulated recording's events, or ``None``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        T/|N| against the gross slip's rank.
+
+    """
+    with sns.axes_style("whitegrid"):
+        fig = Figure(figsize=(6.4, 3.0), layout="constrained")
+        ax = fig.subplots()
+    colour = KIND_MARKERS["gross_slip"][1]
+    for table, filled, label in ((events, True, "measured"),
+                                 (simulated_events, False, "simulated")):
+        if table is None or not len(table):
+            continue
+        gross = table[table["kind"] == "gross_slip"]
+        rank = np.arange(1, len(gross) + 1)
+        face = colour if filled else "none"
+        ax.plot(rank, gross["ratio_before"], "o", color=colour, mfc=face,
+                label=f"before (static), {label}")
+        ax.plot(rank, gross["ratio_after"], "s", color="#2166ac", mfc=face if not filled
+                else "#2166ac", label=f"after (dynamic), {label}")
+    ax.set_xlabel("gross slip (rank)")
+    ax.set_ylabel("T/|N| [-]")
+    ax.legend(fontsize=7, ncols=2)
+    return fig
+
+
+def plot_campaign(summary: pd.DataFrame, fits: pd.DataFrame) -> Figure:
+    """Measured T/|N| and fitted coefficients against H/L, one point per test.
+
+    Left, T/|N| at gross slips: before (static, mean with its 95 % interval) and after
+    (dynamic). Right, the chosen law's fs and fd with their 95 % intervals.
+
+    Parameters
+    ----------
+    summary
+        ``results/summary.csv``.
+    fits
+        ``results/fits.csv`` (:func:`slipwave.fit.fits_table`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels sharing H/L.
+
+    """
+    table = fits.merge(summary, on="test_id", how="left")
+    with sns.axes_style("whitegrid"):
+        fig = Figure(figsize=(9.0, 3.6), layout="constrained")
+        measured, fitted = fig.subplots(1, 2, sharex=True)
+    static, dynamic = KIND_MARKERS["gross_slip"][1], "#2166ac"
+    measured.errorbar(table["height_ratio"], table["static_ratio_mean"],
+                      yerr=[table["static_ratio_mean"] - table["static_ratio_ci_low"],
+                            table["static_ratio_ci_high"] - table["static_ratio_mean"]],
+                      fmt="o", color=static, capsize=3, label="before (static)")
+    measured.plot(table["height_ratio"], table["dynamic_ratio_mean"], "s", color=dynamic,
+                  label="after (dynamic)")
+    measured.set_title("measured T/|N| at gross slips", fontsize=9, loc="left")
+    measured.set_ylabel("T/|N| [-]")
+    for name, colour, label in (("fs", static, "fs"), ("fd", dynamic, "fd")):
+        fitted.errorbar(table["height_ratio"], table[name],
+                        yerr=[table[name] - table[f"{name}_low"],
+                              table[f"{name}_high"] - table[name]],
+                        fmt="o" if name == "fs" else "s", color=colour, capsize=3, label=label)
+    for _, row in table.iterrows():
+        fitted.annotate(f"{row['test_id']} ({row['law']})", (row["height_ratio"], row["fs"]),
+                        textcoords="offset points", xytext=(4, 4), fontsize=7)
+        measured.annotate(str(row["test_id"]), (row["height_ratio"], row["static_ratio_mean"]),
+                          textcoords="offset points", xytext=(4, 4), fontsize=7)
+    fitted.set_title("fitted coefficients (chosen law, 95 % intervals)", fontsize=9, loc="left")
+    fitted.set_ylabel("coefficient [-]")
+    for ax in (measured, fitted):
+        ax.set_xlabel("H/L [-]")
+        ax.legend(fontsize=7)
+    return fig

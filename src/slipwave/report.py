@@ -16,8 +16,28 @@ from slipwave import __version__
 from slipwave.errors import warning_lines
 from slipwave.events import EVENT_COLUMNS, events_table, wave_counts
 from slipwave.io import CHANNELS, atomic_output
-from slipwave.plot import figure_png, plot_frames, plot_kymograph, plot_recording
+from slipwave.plot import (
+    figure_png,
+    plot_frames,
+    plot_gross_ratios,
+    plot_gross_zooms,
+    plot_kymograph,
+    plot_map,
+    plot_pairing,
+    plot_recording,
+    plot_space_time,
+)
 from slipwave.video import ClockFit, open_frames
+
+SETTING_MEANINGS = {
+    "length_mm": ("contact length L", "mm"), "height_mm": ("slab height H", "mm"),
+    "width_mm": ("slab width w", "mm"), "youngs_modulus_mpa": ("Young's modulus E", "MPa"),
+    "poisson_ratio": ("Poisson's ratio", "-"), "normal_load_n": ("normal load N", "N"),
+    "speed_mm_s": ("drive speed V", "mm/s"),
+    "machine_stiffness_n_mm": ("machine stiffness k", "N/mm"),
+    "duration_s": ("duration", "s"), "loading_time_s": ("normal loading time", "s"),
+}
+"""What each setting of a test's configuration is, and its unit."""
 
 
 def _environment() -> jinja2.Environment:
@@ -177,8 +197,142 @@ def video_summary(
     }
 
 
+def _number(value: Any) -> Any:
+    """A table cell as a float when it reads as one (a CSV column of mixed kinds)."""
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
+
+
+def _png(fig: Any) -> str:
+    return base64.b64encode(figure_png(fig)).decode("ascii")
+
+
+def pairing_summary(
+    recording: xr.Dataset,
+    events: xr.Dataset | None,
+    fit: dict[str, Any] | None = None,
+    comparison: pd.DataFrame | None = None,
+    simulated: xr.Dataset | None = None,
+    simulated_events: pd.DataFrame | None = None,
+    contact: xr.Dataset | None = None,
+    placement: dict[str, Any] | None = None,
+    behaviour_map: xr.Dataset | None = None,
+    kymo: xr.Dataset | None = None,
+    clock: ClockFit | None = None,
+) -> dict[str, Any]:
+    """The page's sections on the test's simulation: what is there, and what is missing.
+
+    Parameters
+    ----------
+    recording, events
+        The measurement (``events`` may be ``None``).
+    fit
+        ``fit.json`` (:func:`slipwave.fit.fit_test`), or ``None``.
+    comparison
+        ``comparison.csv`` (:func:`slipwave.compare.compare_test`), or ``None``.
+    simulated
+        The simulated recording, or ``None``.
+    simulated_events
+        Its events, or ``None``.
+    contact
+        The simulated contact history (zones, kymograph, frames), or ``None``.
+    placement
+        The test's place on the behaviour map (``comparison.json``'s ``map``), or ``None``.
+    behaviour_map
+        ``map.nc``, to draw the test on it, or ``None``.
+    kymo, clock
+        The video's kymograph and clock, for the space-time figure, or ``None``.
+
+    Returns
+    -------
+    dict
+        ``setup`` (rows with sources), ``laws`` (rows), ``chosen``, ``comparison``
+        (rows) and ``verdicts``, figures (base64 PNG: ``signals``, ``zooms``,
+        ``ratios``, ``space_time``, ``frames``, ``map``), ``placement`` and ``missing``
+        (what could not be shown, in words).
+
+    """
+    missing: list[str] = []
+    summary: dict[str, Any] = {
+        "setup": [], "laws": [], "chosen": None, "comparison": [], "verdicts": {},
+        "figures": dict.fromkeys(("signals", "zooms", "ratios", "space_time", "frames",
+                                  "map")),
+        "placement": placement, "missing": missing, "edge_reference": None,
+        "edge_threshold": None, "elements": None, "frame_labels": []}
+    if fit is None:
+        missing.append("no fit: the test was not fitted (fit.enabled is false, or its files "
+                       "lack what the simulation needs), so no configuration, friction law "
+                       "or simulation is shown")
+    else:
+        setup = fit["setup"]
+        summary["edge_reference"] = setup.get("edge_reference")
+        summary["edge_threshold"] = fit.get("edge_threshold")
+        for key, (meaning, unit) in SETTING_MEANINGS.items():
+            if key in setup:
+                summary["setup"].append({"key": key, "meaning": meaning, "unit": unit,
+                                         "value": setup[key]["value"],
+                                         "source": setup[key]["source"]})
+        summary["chosen"] = fit["chosen"]
+        summary["elements"] = fit.get("elements")
+        for law, entry in fit["laws"].items():
+            summary["laws"].append({
+                "law": law, "chosen": law == fit["chosen"], "rejected": entry["rejected"],
+                "parameters": [{"name": name, **value}
+                               for name, value in entry["parameters"].items()],
+                "misfit": entry["misfit"], "features": entry["features"],
+                "aic": entry["aic"], "delta_aic": entry["delta_aic"],
+                "evaluations": entry["evaluations"], "method": entry["interval_method"]})
+    if comparison is None:
+        missing.append("no comparison: the test was not compared with a simulation")
+    else:
+        summary["comparison"] = [{key: _number(value) for key, value in row.items()}
+                                 for row in comparison.to_dict("records")]
+        summary["verdicts"] = comparison["verdict"].value_counts().to_dict()
+    figures = summary["figures"]
+    if simulated is None:
+        missing.append("no simulation: measured signals only")
+    else:
+        figures["signals"] = _png(plot_pairing(recording, simulated, events, simulated_events))
+        if events is not None:
+            zooms = plot_gross_zooms(recording, simulated, events, simulated_events)
+            if zooms is None:
+                missing.append("no measured gross slip to zoom on")
+            else:
+                figures["zooms"] = _png(zooms)
+            figures["ratios"] = _png(plot_gross_ratios(events_table(events), simulated_events))
+    if contact is None and kymo is None:
+        missing.append("no video and no simulated contact: no space-time diagram")
+    else:
+        timing = (clock.offset, clock.rate) if clock is not None else (0.0, 1.0)
+        figures["space_time"] = _png(plot_space_time(contact, kymo, timing))
+        if kymo is None:
+            missing.append("no video: the simulated zones and kymograph are shown alone")
+        if contact is None:
+            missing.append("no simulated contact history: the video's kymograph alone")
+    if contact is not None and "frame" in contact:
+        figures["frames"] = _png(plot_frames(
+            list(contact["frame"].values), [float(t) for t in contact["frame_time"].values],
+            [str(label) for label in contact["frame_label"].values]))
+        summary["frame_labels"] = [str(label) for label in contact["frame_label"].values]
+    if behaviour_map is not None and placement is not None and fit is not None:
+        fs = fit["laws"][fit["chosen"]]["parameters"]["fs"]
+        tests = pd.DataFrame([{"test_id": fit["test_id"], "height_ratio":
+                               placement["height_ratio"], "ratio": fs["value"],
+                               "ci_low": fs["low"], "ci_high": fs["high"]}])
+        figures["map"] = _png(plot_map(behaviour_map, tests,
+                                       label="this test (fitted fs, 95 % interval)"))
+    elif fit is not None:
+        missing.append("no behaviour map: the test is not placed on it")
+    return summary
+
+
 def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
-                     video: dict[str, Any] | None = None) -> str:
+                     video: dict[str, Any] | None = None,
+                     pairing: dict[str, Any] | None = None) -> str:
     """The HTML page of one test: metadata, warnings, channels and their plot.
 
     With ``events`` (:func:`slipwave.events.events_dataset`) the plot shades
@@ -196,6 +350,8 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         ``events.nc``, or ``None``.
     video
         From :func:`video_summary`, or ``None``.
+    pairing
+        From :func:`pairing_summary`, or ``None`` (the measurement alone).
 
     Returns
     -------
@@ -223,22 +379,55 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         figure=base64.b64encode(png).decode("ascii"),
         events=None if events is None else event_summary(events),
         video=video,
+        pairing=pairing,
         version=__version__,
     )
 
 
-def write_test_page(
-    recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None,
-    video: dict[str, Any] | None = None,
-) -> Path:
-    """Write :func:`render_test_page` to ``path``, whole or not at all.
+def write_pdf(html: str, path: str | PathLike[str]) -> Path:
+    """Print an HTML page (its print style sheet: A4) to PDF, whole or not at all.
 
     Parameters
     ----------
-    recording, events, video
+    html
+        The page.
+    path
+        The PDF to write.
+
+    Returns
+    -------
+    Path
+        The PDF written.
+
+    """
+    import logging
+
+    import weasyprint
+
+    # WeasyPrint reports every CSS rule it ignores (screen-only ones) as a warning
+    logging.getLogger("weasyprint").setLevel(logging.ERROR)
+    # no base URL: links between reports stay relative (the folder can move, and the
+    # PDF is the same wherever it was built); figures are embedded
+    with atomic_output(path) as temporary:
+        weasyprint.HTML(string=html).write_pdf(temporary)
+    return Path(path)
+
+
+def write_test_page(
+    recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None,
+    video: dict[str, Any] | None = None, pairing: dict[str, Any] | None = None, *,
+    pdf: str | PathLike[str] | None = None,
+) -> Path:
+    """Write :func:`render_test_page` to ``path`` (and ``pdf``), whole or not at all.
+
+    Parameters
+    ----------
+    recording, events, video, pairing
         As in :func:`render_test_page`.
     path
         The HTML file to write.
+    pdf
+        Also print it to this PDF; ``None``: no PDF.
 
     Returns
     -------
@@ -246,6 +435,98 @@ def write_test_page(
         The page written.
 
     """
+    html = render_test_page(recording, events, video, pairing)
+    if pdf is not None:
+        write_pdf(html, pdf)
     with atomic_output(path) as temporary:
-        temporary.write_text(render_test_page(recording, events, video), encoding="utf-8")
+        temporary.write_text(html, encoding="utf-8")
+    return Path(path)
+
+
+def campaign_summary(summary: pd.DataFrame, fits: pd.DataFrame | None,
+                     comparisons: dict[str, dict[str, Any]],
+                     behaviour_map: xr.Dataset | None = None) -> dict[str, Any]:
+    """The campaign report's content: one row per test, the figures over the tests.
+
+    Parameters
+    ----------
+    summary
+        ``results/summary.csv`` (:func:`slipwave.events.summary_row` per test).
+    fits
+        ``results/fits.csv`` (:func:`slipwave.fit.fits_table`), or ``None``.
+    comparisons
+        Each test's ``comparison.json`` by test id (verdict counts, place on the map).
+    behaviour_map
+        ``map.nc``, or ``None``.
+
+    Returns
+    -------
+    dict
+        ``tests`` (rows), ``figures`` (base64 PNG) and ``missing``.
+
+    """
+    from slipwave.plot import plot_campaign
+
+    rows = []
+    fitted = fits.set_index("test_id") if fits is not None and len(fits) else None
+    for _, test in summary.iterrows():
+        test_id = str(test["test_id"])
+        row: dict[str, Any] = {"test_id": test_id, **{
+            key: test.get(key) for key in ("gross_slip_waves", "partial_slip_waves",
+                                           "static_ratio_mean", "static_ratio_ci_low",
+                                           "static_ratio_ci_high", "dynamic_ratio_mean")}}
+        if fitted is not None and test_id in fitted.index:
+            fit = fitted.loc[test_id]
+            row.update(height_ratio=fit["height_ratio"], law=fit["law"],
+                       fs=fit["fs"], fs_low=fit["fs_low"], fs_high=fit["fs_high"],
+                       fd=fit["fd"], fd_low=fit["fd_low"], fd_high=fit["fd_high"])
+        compared = comparisons.get(test_id, {})
+        row["verdicts"] = compared.get("verdicts", {})
+        row["behaviour"] = (compared.get("map") or {}).get("behaviour", "")
+        rows.append(row)
+    missing = []
+    figures: dict[str, str | None] = {"fits": None, "map": None}
+    if fitted is not None and fits is not None:
+        figures["fits"] = _png(plot_campaign(summary, fits))
+    else:
+        missing.append("no fits: the tests were not fitted")
+    if behaviour_map is not None and fitted is not None:
+        tests = pd.DataFrame({"test_id": fitted.index, "height_ratio": fitted["height_ratio"],
+                              "ratio": fitted["fs"], "ci_low": fitted["fs_low"],
+                              "ci_high": fitted["fs_high"]})
+        figures["map"] = _png(plot_map(behaviour_map, tests.reset_index(drop=True),
+                                       label="tests (fitted fs, 95 % interval)"))
+    else:
+        missing.append("no behaviour map with the tests")
+    return {"tests": rows, "figures": figures, "missing": missing}
+
+
+def write_campaign_report(content: dict[str, Any], path: str | PathLike[str], *,
+                          pdf: str | PathLike[str] | None = None,
+                          title: str = "Campaign") -> Path:
+    """Write the campaign report (HTML, and PDF), whole or not at all.
+
+    Parameters
+    ----------
+    content
+        From :func:`campaign_summary`.
+    path
+        The HTML file.
+    pdf
+        Also print it to this PDF; ``None``: no PDF.
+    title
+        The report's title.
+
+    Returns
+    -------
+    Path
+        The page written.
+
+    """
+    html = _environment().get_template("campaign.html.j2").render(
+        title=title, version=__version__, **content)
+    if pdf is not None:
+        write_pdf(html, pdf)
+    with atomic_output(path) as temporary:
+        temporary.write_text(html, encoding="utf-8")
     return Path(path)

@@ -2,15 +2,31 @@
 # table, no logic (that lives in slipwave.campaign).
 
 
+def scaled_memory(megabytes):
+    """A job's memory, MB, growing with each retry (a job killed for memory gets more)."""
+    return lambda wildcards, attempt: megabytes * attempt
+
+
 def test_row(wildcards):
     return campaign.loc[wildcards.test_id]
 
 
 def report_inputs(wildcards):
+    test = wildcards.test_id
     inputs = {
-        "recording": f"results/{wildcards.test_id}/recording.nc",
-        "events": f"results/{wildcards.test_id}/events.nc",
+        "recording": f"results/{test}/recording.nc",
+        "events": f"results/{test}/events.nc",
     }
+    if config["fit"]["enabled"]:
+        inputs.update(
+            fit=f"results/{test}/fit.json",
+            comparison=f"results/{test}/comparison.csv",
+            comparison_json=f"results/{test}/comparison.json",
+            simulated=f"results/{test}/simulated/recording.nc",
+            simulated_events=f"results/{test}/simulated/events.csv",
+            contact=f"results/{test}/simulated/contact.nc",
+            map="results/map/map.nc",
+        )
     frames = test_row(wildcards)["frames"]
     if frames:
         inputs.update(
@@ -44,3 +60,59 @@ def map_row_options(wildcards):
         f"--elements {settings['elements']} --normal-control {settings['normal_control']} "
         f"--normal-friction {friction} --min-zone {settings['min_zone_mm']}"
     )
+
+
+def setup_settings(wildcards):
+    return " ".join(setup_cells(test_row(wildcards)))
+
+
+def compare_inputs(wildcards):
+    inputs = {
+        "events": f"results/{wildcards.test_id}/events.nc",
+        "simulated": f"results/{wildcards.test_id}/simulated/recording.nc",
+        "steps": f"results/{wildcards.test_id}/simulated/steps.nc",
+        "fit": f"results/{wildcards.test_id}/fit.json",
+        "map": "results/map/map.nc",
+    }
+    if test_row(wildcards)["frames"]:
+        inputs["waves"] = f"results/{wildcards.test_id}/waves.csv"
+    return inputs
+
+
+def detect_inputs(wildcards):
+    inputs = {"recording": f"results/{wildcards.test_id}/recording.nc"}
+    if config["fit"]["enabled"]:
+        inputs["simulated"] = f"results/{wildcards.test_id}/simulated/recording.nc"
+    return inputs
+
+
+def threshold_option(wildcards, input):
+    if "simulated" in input.keys():
+        return f"--simulated {input.simulated}"
+    return f"--gross-edge-ratio {config['detection']['gross_edge_ratio']}"
+
+
+def pairing_options(wildcards, input):
+    names = ("fit", "comparison", "comparison_json", "simulated", "simulated_events",
+             "contact", "map")
+    return " ".join(
+        f"--{name.replace('_', '-')} {input[name]}" for name in names if name in input.keys()
+    )
+
+
+def campaign_report_inputs(wildcards):
+    inputs = {"summary": "results/summary.csv"}
+    if config["fit"]["enabled"]:
+        inputs.update(
+            fits="results/fits.csv",
+            comparisons=expand("results/{test_id}/comparison.json", test_id=TEST_IDS),
+            map="results/map/map.nc",
+        )
+    return inputs
+
+
+def campaign_options(wildcards, input):
+    if "fits" not in input.keys():
+        return ""
+    comparisons = " ".join(str(path) for path in input.comparisons)
+    return f"--fits {input.fits} --comparisons {comparisons} --map {input.map}"

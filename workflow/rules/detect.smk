@@ -1,7 +1,8 @@
 rule detect:
-    """Slip events of one test: T drops classified by the DG/DD jumps, phases, T/|N|."""
+    """Slip events of one test: T drops classified by the DG/DD jumps (the threshold read
+    off the test's simulated slips), phases, T/|N|."""
     input:
-        "results/{test_id}/recording.nc",
+        unpack(detect_inputs),
     output:
         csv=report(
             "results/{test_id}/events.csv",
@@ -17,14 +18,18 @@ rule detect:
         max_spike=config["detection"]["max_spike"],
         max_duration=config["detection"]["max_duration"],
         min_fall_rate=config["detection"]["min_fall_rate"],
-        gross_edge_ratio=lambda wildcards: gross_edge_ratio(config, test_row(wildcards)),
+        gross_edge_ratio=threshold_option,
         edge_convention=lambda wildcards: edge_convention(config, test_row(wildcards)),
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(1000),
+        runtime=10,
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave detect {input:q} -o {output.csv:q} --netcdf {output.netcdf:q} "
+        "slipwave detect {input.recording:q} -o {output.csv:q} --netcdf {output.netcdf:q} "
         "--test-id {wildcards.test_id:q} --threshold {params.threshold} "
         "--max-spike {params.max_spike} --max-duration {params.max_duration} "
-        "--min-fall-rate {params.min_fall_rate} --gross-edge-ratio {params.gross_edge_ratio} "
+        "--min-fall-rate {params.min_fall_rate} {params.gross_edge_ratio} "
         "--edge-convention {params.edge_convention} "
         "> {log:q} 2>&1"

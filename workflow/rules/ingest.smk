@@ -8,6 +8,10 @@ rule ingest:
         "results/logs/ingest/{test_id}.log",
     params:
         columns=lambda wildcards: column_pairs(config, test_row(wildcards)["columns"]),
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(500),
+        runtime=10,
     conda:
         "../envs/slipwave.yaml"
     shell:

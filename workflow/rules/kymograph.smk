@@ -10,6 +10,10 @@ rule kymograph:
         length=config["video"]["length_mm"],
         band=config["video"]["band_mm"],
         fps=frame_rate_option,
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(1500),
+        runtime=20,
     conda:
         "../envs/slipwave.yaml"
     shell:

@@ -1,28 +1,39 @@
-# The behaviour map (the paper's figure 2): one job per H/L (the slab condensed once),
-# then the rows joined, the behaviours named and the map drawn.
+# The behaviour map (the paper's figure 2): one job per H/L and shard of its f range
+# (map.shard_size coefficients; 0: the whole row, the slab condensed once per job), then
+# the shards joined, the behaviours named and the map drawn. On a cluster, the shards'
+# jobs are batched by their group (profiles/slurm: group-components).
 
 
 rule map_row:
-    """Every friction coefficient of the map at one H/L."""
+    """A shard of the map's friction coefficients at one H/L."""
     output:
-        "results/map/rows/hl{height_ratio}.nc",
+        "results/map/rows/hl{height_ratio}-{shard}.nc",
     log:
-        "results/logs/map/hl{height_ratio}.log",
+        "results/logs/map/hl{height_ratio}-{shard}.log",
     params:
         frictions=" ".join(str(v) for v in config["map"]["frictions"]),
         settings=map_row_options,
+        shard_size=config["map"]["shard_size"],
+        memory_gb=lambda wildcards, resources: resources.mem_mb / 1000,
+    group:
+        "map_rows"
     threads: 1
+    resources:
+        mem_mb=scaled_memory(config["map"]["mem_mb"]),
+        runtime=20,
     conda:
         "../envs/slipwave.yaml"
     shell:
         "slipwave map row --height-ratio {wildcards.height_ratio} "
-        "--frictions {params.frictions} {params.settings} -o {output:q} > {log:q} 2>&1"
+        "--frictions {params.frictions} {params.settings} --shard {wildcards.shard} "
+        "--shard-size {params.shard_size} --memory-limit {params.memory_gb} "
+        "-o {output:q} > {log:q} 2>&1"
 
 
 rule map:
     """The map: map.nc (H/L x f: behaviour, succession, L, first events, T/N), map.csv, legend."""
     input:
-        expand("results/map/rows/hl{height_ratio}.nc", height_ratio=MAP_HEIGHT_RATIOS),
+        MAP_SHARD_FILES,
     output:
         netcdf="results/map/map.nc",
         csv="results/map/map.csv",
@@ -31,6 +42,10 @@ rule map:
         ),
     log:
         "results/logs/map/map.log",
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(2000),
+        runtime=10,
     conda:
         "../envs/slipwave.yaml"
     shell:
@@ -56,6 +71,10 @@ rule map_figures:
         "results/logs/map/map_figures.log",
     params:
         tests=" ".join(height_ratio_pairs(campaign)),
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(3000),
+        runtime=15,
     conda:
         "../envs/slipwave.yaml"
     shell:

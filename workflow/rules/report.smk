@@ -1,20 +1,65 @@
 rule report:
-    """The HTML page of one test: channels, phases and slips; kymograph and frames if filmed."""
+    """The report of one test, HTML and PDF: configuration, verdicts, measured against
+    simulated, space-time, frames, friction laws, the map; what is missing, said."""
     input:
         unpack(report_inputs),
     output:
-        report(
+        html=report(
             "reports/{test_id}.html",
             caption="../report/report.rst",
             category="Tests",
-            labels={"test": "{test_id}"},
+            labels={"test": "{test_id}", "format": "HTML"},
+        ),
+        pdf=report(
+            "reports/{test_id}.pdf",
+            caption="../report/report.rst",
+            category="Tests",
+            labels={"test": "{test_id}", "format": "PDF"},
         ),
     log:
         "results/logs/report/{test_id}.log",
     params:
         video=video_options,
+        pairing=pairing_options,
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(3000),
+        runtime=15,
     conda:
         "../envs/slipwave.yaml"
     shell:
         "slipwave report {input.recording:q} --events {input.events:q} {params.video} "
-        "-o {output:q} > {log:q} 2>&1"
+        "{params.pairing} -o {output.html:q} --pdf {output.pdf:q} > {log:q} 2>&1"
+
+
+rule campaign_report:
+    """The campaign report, HTML and PDF: one row per test, T/|N| and fitted friction
+    against H/L, the behaviour map with the tests."""
+    input:
+        unpack(campaign_report_inputs),
+    output:
+        html=report(
+            "reports/campaign.html",
+            caption="../report/campaign.rst",
+            category="Campaign",
+            labels={"format": "HTML"},
+        ),
+        pdf=report(
+            "reports/campaign.pdf",
+            caption="../report/campaign.rst",
+            category="Campaign",
+            labels={"format": "PDF"},
+        ),
+    log:
+        "results/logs/report/campaign.log",
+    params:
+        pairing=campaign_options,
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(3000),
+        runtime=15,
+    conda:
+        "../envs/slipwave.yaml"
+    shell:
+        "slipwave report-campaign --summary {input.summary:q} {params.pairing} "
+        "-o {output.html:q} --pdf {output.pdf:q} > {log:q} 2>&1"

@@ -6,6 +6,10 @@ rule summary:
         report("results/summary.csv", caption="../report/summary.rst", category="Campaign"),
     log:
         "results/logs/summary.log",
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(500),
+        runtime=5,
     conda:
         "../envs/slipwave.yaml"
     shell:

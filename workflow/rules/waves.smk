@@ -15,6 +15,10 @@ rule waves:
         clock="results/{test_id}/clock.json",
     log:
         "results/logs/waves/{test_id}.log",
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(1500),
+        runtime=10,
     conda:
         "../envs/slipwave.yaml"
     shell:

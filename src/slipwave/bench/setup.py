@@ -110,6 +110,29 @@ class TestSetup:
             loading_time=self["loading_time_s"],
             machine_stiffness=self["machine_stiffness_n_mm"], video="none")
 
+    @classmethod
+    def from_dict(cls, content: Mapping[str, Any]) -> TestSetup:
+        """The setup of :meth:`to_dict` (a ``fit.json``'s ``setup``).
+
+        Parameters
+        ----------
+        content
+            ``test_id``, ``edge_reference`` and ``{key: {"value", "source"}}``.
+
+        Returns
+        -------
+        TestSetup
+            The same setup.
+
+        """
+        try:
+            settings = {key: Setting(float(item["value"]), str(item["source"]))
+                        for key, item in content.items()
+                        if key not in ("test_id", "edge_reference")}
+            return cls(str(content["test_id"]), settings, str(content["edge_reference"]))
+        except (KeyError, TypeError, ValueError) as err:
+            raise SlipwaveError(f"not a test setup: {err}") from err
+
     def to_dict(self) -> dict[str, Any]:
         """The setup in plain types, each value with its source.
 
@@ -304,7 +327,9 @@ def read_test_setup(recording: xr.Dataset, cells: Mapping[str, Any]) -> TestSetu
     settings["speed_mm_s"] = speed
     settings["machine_stiffness_n_mm"] = stiffness
     time = recording["time"].values
-    settings["duration_s"] = Setting(float(time[-1] - time[0]), "recording length")
+    interval = float(np.median(np.diff(time))) if time.size > 1 else 0.0
+    settings["duration_s"] = Setting(float(time[-1] - time[0]) + interval,
+                                     "recording length (samples times interval)")
     settings["loading_time_s"] = Setting(normal_loading_time(recording, normal.value),
                                          "measured: |N| reaching 99 % of its plateau")
     reference = str(cells.get("edge_reference", "") or "").strip()

@@ -40,8 +40,8 @@ OPEN, STICK, SLIP = 0, 1, 2
 
 _MAX_ITERATIONS = 60
 _PREDICTOR = 0.9  # see _iterate
-_WEAKENING_TOLERANCE = 1e-8  # relative change of a wave coefficient that ends the fixed point
-_MAX_WEAKENINGS = 200
+_WEAKENING_TOLERANCE = 1e-6  # relative change of a wave coefficient that ends the fixed point
+_MAX_WEAKENINGS = 1000
 _PLANS_KEPT = 16  # factorised zone states kept per body
 
 

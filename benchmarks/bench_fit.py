@@ -1,0 +1,177 @@
+"""Fitting friction laws (issue 15): recovery on virtual tests with hidden parameters, speed.
+
+1. Recovery: ten virtual-bench tests (280 s, on the fit's mesh) with parameters drawn
+   at random, hidden from the fit: H/L 0.25-0.75, fs 0.8-1.1, fd 0.5-0.65, half with a
+   run-in (fs_final 0.1-0.35 above fs over 2-5 gross slips), machine stiffness 30-60
+   N/mm, noise seed. Each goes through the test's own pipeline (files, setup measured
+   from them, events, fit of Coulomb and run-in). Targets: the chosen law's fs and fd
+   within 2 % of the truth in every test, and each true value inside its 95 % interval
+   in at least 9 tests of 10; the comparison of the test with its simulation agrees
+   on every compared feature.
+2. Slip-weakening: one test generated with fs 1.0, fd 0.6, Dc 0.1 mm; Coulomb must be
+   rejected by AIC in favour of slip-weakening, and Dc recovered within 10 %.
+3. Speed: simulate + fit + compare of one 280 s test (hl050's geometry) on one core,
+   target <= 60 s; the split is printed.
+
+Run: make bench  (or python benchmarks/bench_fit.py [--tests 10] [--jobs 2] [--skip-sw])
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import argparse
+import json
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from slipwave.bench.generate import BenchTest, simulate_test, write_test
+from slipwave.bench.replay import replay_test
+from slipwave.bench.setup import read_test_setup
+from slipwave.compare import compare_test, verdict_counts
+from slipwave.events import detect_events
+from slipwave.fit import chosen_law, fit_test, measured_events
+from slipwave.io import read_acquisition
+from targets import check, finish
+
+ROOT = Path(__file__).parents[1]
+CELLS = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
+ELEMENTS = 80
+
+
+def hidden_tests(count: int, seed: int = 2026) -> list[tuple[dict[str, Any], int]]:
+    rng = np.random.default_rng(seed)
+    tests = []
+    for k in range(count):
+        fs = float(np.round(rng.uniform(0.8, 1.1), 3))
+        truth: dict[str, Any] = {
+            "height": float(np.round(80.0 * rng.uniform(0.25, 0.75), 1)), "fs": fs,
+            "fd": float(np.round(rng.uniform(0.5, 0.65), 3)),
+            "machine_stiffness": float(np.round(rng.uniform(30.0, 60.0), 1)),
+            "fs_final": None}
+        if k % 2:
+            truth["fs_final"] = float(np.round(fs + rng.uniform(0.1, 0.35), 3))
+            truth["runin_slips"] = int(rng.integers(2, 6))
+        tests.append((truth, 100 + k))
+    return tests
+
+
+def run_test(truth: dict[str, Any], seed: int, laws: list[str]) -> dict[str, Any]:
+    spec = BenchTest(f"hidden{seed}", elements=ELEMENTS, video="none", **truth)
+    result = simulate_test(spec, seed=seed)
+    with tempfile.TemporaryDirectory() as folder:
+        csv = write_test(result, folder)["csv"]
+        recording = read_acquisition(csv)
+    setup = read_test_setup(recording, {"test_id": spec.test_id, **CELLS})
+    events = measured_events(recording)
+    began = time.perf_counter()
+    fit = fit_test(setup, events, laws=laws, elements=ELEMENTS)
+    fitted = time.perf_counter()
+    replay = replay_test(setup, chosen_law(fit), elements=ELEMENTS, kymograph=False)
+    simulated = time.perf_counter()
+    measured = detect_events(recording,
+                             gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    table = compare_test(measured, replay.recording, replay.simulation,
+                         min_drop=float(events.attrs["min_drop"]))
+    compared = time.perf_counter()
+    return {"truth": truth, "seed": seed, "fit": {k: v for k, v in fit.items() if k != "setup"},
+            "verdicts": verdict_counts(table),
+            "differs": table.loc[table["verdict"] == "differs", "feature"].tolist(),
+            "seconds": {"fit": fitted - began, "simulate": simulated - fitted,
+                        "compare": compared - simulated}}
+
+
+def recovery(count: int, jobs: int) -> None:
+    tests = hidden_tests(count)
+    laws = [["coulomb", "run-in"]] * len(tests)
+    with ProcessPoolExecutor(jobs) as pool:
+        results = list(pool.map(run_test, *zip(*tests, strict=True), laws))
+    within = inside = agree = 0
+    for result in results:
+        truth, fit = result["truth"], result["fit"]
+        law = fit["laws"][fit["chosen"]]["parameters"]
+        runin = truth["fs_final"] is not None
+        errors = {name: law[name]["value"] / truth[name] - 1 for name in ("fs", "fd")}
+        covered = all(law[name]["low"] <= truth[name] <= law[name]["high"]
+                      for name in ("fs", "fd"))
+        within += all(abs(e) <= 0.02 for e in errors.values())
+        inside += covered
+        agree += result["verdicts"]["differs"] == 0
+        print(f"H {truth['height']:5.1f} fs {truth['fs']:.3f} fd {truth['fd']:.3f} "
+              f"{'run-in to ' + format(truth['fs_final'], '.3f') if runin else 'Coulomb':18s}"
+              f" k {truth['machine_stiffness']:4.1f} -> {fit['chosen']:8s} fs "
+              f"{law['fs']['value']:.4f} [{law['fs']['low']:.4f}, {law['fs']['high']:.4f}] "
+              f"fd {law['fd']['value']:.4f} [{law['fd']['low']:.4f}, {law['fd']['high']:.4f}] "
+              f"errors {errors['fs']:+.2%} {errors['fd']:+.2%} covered {covered}; "
+              f"verdicts {result['verdicts']} {result['differs']}; "
+              f"fit {result['seconds']['fit']:.0f} s")
+    print(f"fs and fd within 2 %: {within}/{len(results)} "
+          f"{check('fs, fd within 2 %', within, len(results), at_least=True)}")
+    print(f"truth inside both 95 % intervals: {inside}/{len(results)} "
+          f"{check('truth inside intervals', inside, 0.9 * len(results), at_least=True)}")
+    print(f"comparison agrees on every feature: {agree}/{len(results)} "
+          f"{check('comparison agrees', agree, len(results), at_least=True)}")
+    (ROOT / "results").mkdir(exist_ok=True)
+    (ROOT / "results/bench_fit.json").write_text(json.dumps(results, indent=1, default=str))
+
+
+def slip_weakening() -> None:
+    truth = {"height": 40.0, "fs": 1.0, "fd": 0.6, "dc": 0.1, "fs_final": None,
+             "machine_stiffness": 40.0}
+    result = run_test(truth, 7, ["coulomb", "slip-weakening"])
+    fit = result["fit"]
+    weakening = fit["laws"]["slip-weakening"]
+    dc = weakening["parameters"]["dc"]["value"]
+    print(f"slip-weakening test: chosen {fit['chosen']}, Coulomb delta AIC "
+          f"{fit['laws']['coulomb']['delta_aic']:.1f} (rejected "
+          f"{fit['laws']['coulomb']['rejected']}), Dc {dc:.4f} mm (truth 0.1), "
+          f"fs {weakening['parameters']['fs']['value']:.4f}, "
+          f"fd {weakening['parameters']['fd']['value']:.4f}")
+    check("Coulomb rejected for slip-weakening", float(fit["laws"]["coulomb"]["rejected"]),
+          1.0, at_least=True)
+    print(f"Dc within 10 %: {check('Dc within 10 %', abs(dc / 0.1 - 1), 0.10, at_least=False)}")
+
+
+def speed() -> None:
+    truth = {"height": 40.0, "fs": 0.9, "fd": 0.6, "fs_final": 1.2, "runin_slips": 4,
+             "machine_stiffness": 40.0}
+    result = run_test(truth, 1, ["coulomb", "run-in", "slip-weakening"])
+    seconds = result["seconds"]
+    total = sum(seconds.values())
+    print(f"one 280 s test, three laws: fit {seconds['fit']:.1f} s, simulate "
+          f"{seconds['simulate']:.1f} s, compare {seconds['compare']:.1f} s; per law: "
+          + ", ".join(f"{law} {entry['evaluations']} simulations {entry['seconds']:.1f} s"
+                      for law, entry in result["fit"]["laws"].items())
+          + f"; total {total:.1f} s "
+          f"{check('simulate + fit + compare', total, 60.0, at_least=False)}"
+          f" (load {os.getloadavg()[0]:.2f})")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tests", type=int, default=10)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--skip-sw", action="store_true")
+    parser.add_argument("--skip-speed", action="store_true")
+    parser.add_argument("--skip-recovery", action="store_true")
+    args = parser.parse_args()
+    print(f"load before: {os.getloadavg()[0]:.2f}")
+    if not args.skip_speed:
+        speed()
+    if not args.skip_recovery:
+        recovery(args.tests, args.jobs)
+    if not args.skip_sw:
+        slip_weakening()
+    finish()
+
+
+if __name__ == "__main__":
+    main()

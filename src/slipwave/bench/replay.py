@@ -1,0 +1,207 @@
+"""The simulate stage: a test run again through the solver with its fitted law.
+
+:func:`replay_test` follows the test's own load path (its setup, from
+:func:`slipwave.bench.setup.read_test_setup`) with a friction law and returns what the
+measurement has, in the measurement's shapes: a recording like
+:func:`slipwave.io.read_acquisition`'s (T, N, DG, DD, DT against time, noise-free,
+the edges in the test's edge reference), and the contact's history: the zone state of
+every node at every step and the simulated photoelastic kymograph (the virtual bench's
+camera model, the band the video's kymograph reads), so that detection, the
+kymograph's readers and the comparison run on both unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from slipwave.bench.camera import Camera, Photoelastic
+from slipwave.bench.sensors import clean_signals, step_times
+from slipwave.bench.setup import TestSetup
+from slipwave.cache import DiskCache
+from slipwave.defaults import BAND_MM, CONVENTIONS
+from slipwave.fit import WAVE_SPEED_MM_S, edge_threshold
+from slipwave.solver import Coulomb, Slab, condense, simulate
+
+STATE_NAMES = "open stick slip"
+"""Zone state codes 0, 1, 2 (the solver's)."""
+
+
+@dataclass
+class Replay:
+    """A test simulated along its own load path.
+
+    Attributes
+    ----------
+    simulation
+        The solver's steps (:func:`slipwave.solver.simulate`).
+    recording
+        T, N, DG, DD, DT against time, as :func:`slipwave.io.read_acquisition` returns.
+    contact
+        ``state(time, x)`` and ``intensity(time, x)`` (the simulated kymograph) at each
+        step's end.
+
+    """
+
+    simulation: xr.Dataset
+    recording: xr.Dataset
+    contact: xr.Dataset
+
+
+def replay_test(setup: TestSetup, friction: Coulomb, *, elements: int = 80,
+                sample_rate: float = 100.0, kymograph: bool = True) -> Replay:
+    """Simulate a test with a friction law and shape it like the measurement.
+
+    Parameters
+    ----------
+    setup
+        The test's configuration.
+    friction
+        The law (usually the fit's chosen one).
+    elements
+        Elements along the contact (the fit's).
+    sample_rate
+        The recording's sampling rate, Hz.
+    kymograph
+        Also render the simulated kymograph.
+
+    Returns
+    -------
+    Replay
+        The simulation, its recording and its contact history. The recording's attrs
+        hold ``gross_edge_ratio``, the test's gross/partial edge threshold read off the
+        simulated slips (:func:`slipwave.fit.edge_threshold`).
+
+    """
+    spec = setup.bench_test(friction, elements=elements)
+    slab = spec.slab()
+    simulation = simulate(slab, friction, spec.load_path(),
+                          condensed=condense(slab, store=DiskCache()))
+    recording = clean_signals(simulation, speed=setup["speed_mm_s"],
+                              loading_time=setup["loading_time_s"],
+                              duration=setup["duration_s"], sample_rate=sample_rate,
+                              wave_speed=WAVE_SPEED_MM_S)
+    if setup.edge_reference == "flat":  # the sensors read the edges against the flat
+        for channel in ("DG", "DD"):
+            recording[channel] = recording[channel] - recording["DT"]
+    recording.attrs.update({
+        "test_id": setup.test_id, "source": f"simulation of {setup.test_id}",
+        "sample_rate_hz": sample_rate, "edge_reference": setup.edge_reference,
+        "gross_edge_ratio": edge_threshold(simulation, edge_reference=setup.edge_reference),
+        "friction_law": simulation.attrs.get("friction_law", type(friction).__name__),
+        "Conventions": CONVENTIONS,
+        **{key: setting.value for key, setting in setup.settings.items()}})
+    times = step_times(simulation, speed=setup["speed_mm_s"],
+                       loading_time=setup["loading_time_s"])
+    contact = contact_history(simulation, times, spec.slab() if kymograph else None)
+    return Replay(simulation, recording, contact)
+
+
+def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None = None
+                    ) -> xr.Dataset:
+    """Zone states and, with ``slab``, the simulated kymograph, against time.
+
+    Parameters
+    ----------
+    simulation
+        The solver's steps.
+    times
+        Each step's end, s (:func:`slipwave.bench.sensors.step_times`).
+    slab
+        The slab simulated; ``None``: no kymograph.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``state(time, x)`` (0 open, 1 stick, 2 slip), ``wave(time)`` and, with a slab,
+        ``intensity(time, x_image)``: the dark-field intensity (grey levels, no noise)
+        averaged over the video kymograph's band above the interface.
+
+    """
+    keep = np.concatenate([np.diff(times) > 0, [True]])  # one row per distinct time
+    ds = xr.Dataset(
+        {"state": (("time", "x"), simulation["state"].values[keep].astype(np.int8),
+                   {"long_name": "zone state of the contact node", "units": "1",
+                    "flag_values": [0, 1, 2], "flag_meanings": STATE_NAMES}),
+         "wave": ("time", simulation["wave"].values[keep].astype(str),
+                  {"long_name": "the step's wave: none, partial or gross"})},
+        coords={"time": ("time", times[keep], {"units": "s", "long_name": "time"}),
+                "x": ("x", simulation["x"].values, {"units": "mm",
+                                                    "long_name": "position along the contact"})},
+        attrs={"Conventions": CONVENTIONS})
+    if slab is None:
+        return ds
+    camera = Camera(noise=0.0)
+    image = Photoelastic(slab, camera)
+    rows = np.nonzero(image.inside)[0]
+    height = (image.interface_row - (rows + 0.5)) / image.scale
+    band = (height >= BAND_MM[0]) & (height <= BAND_MM[1])
+    x = image.pixel_x[band]
+    edges = np.linspace(-slab.length / 2, slab.length / 2, 2 * slab.elements + 1)
+    column = np.clip(np.digitize(x, edges) - 1, 0, edges.size - 2)
+    counts = np.bincount(column, minlength=edges.size - 1)
+    ux, uy = simulation["ux"].values[keep], simulation["uy"].values[keep]
+    rows_out = np.empty((ux.shape[0], edges.size - 1), dtype=np.float32)
+    for k in range(ux.shape[0]):
+        stress = image.stress(np.concatenate([ux[k], uy[k]]))[:, band]
+        shown = camera.intensity * np.sin(np.pi * image.fringe_order(stress)) ** 2
+        rows_out[k] = np.bincount(column, shown, minlength=edges.size - 1) / np.maximum(counts, 1)
+    ds = ds.assign_coords(x_image=("x_image", 0.5 * (edges[1:] + edges[:-1]),
+                                   {"units": "mm", "long_name": "position in the image"}))
+    ds["intensity"] = (("time", "x_image"), rows_out,
+                       {"units": "1", "long_name": "simulated dark-field intensity in the "
+                        f"band {BAND_MM[0]}-{BAND_MM[1]} mm above the interface (grey levels)"})
+    return ds.merge(first_gross_frames(simulation, times, image))
+
+
+def first_gross_frames(simulation: xr.Dataset, times: np.ndarray, image: Photoelastic
+                       ) -> xr.Dataset:
+    """Simulated frames around the first gross slip: before, at its peak, after.
+
+    The solver is quasi-static, so its frames are its states: the ends of the two
+    steps before the gross slip's, the stuck peak of that step (just before the
+    wave), and its end (after the wave); rendered by the camera model without noise.
+
+    Parameters
+    ----------
+    simulation
+        The solver's steps (with ``ux``, ``uy`` and their ``_before_wave``).
+    times
+        Each step's end, s.
+    image
+        The camera model of the slab.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``frame(frame, row, column)`` (8-bit grey levels), ``frame_time(frame)``,
+        ``frame_label(frame)``; empty without a gross slip.
+
+    """
+    gross = np.flatnonzero((simulation["wave"].values == "gross")
+                           & (simulation["phase"].values == "tangential"))
+    if not gross.size:
+        return xr.Dataset()
+    k = int(gross[0])
+    rng = np.random.default_rng(0)
+    chosen = [(max(k - 2, 0), "final", "two steps before"), (max(k - 1, 0), "final",
+                                                             "step before"),
+              (k, "before_wave", "peak, just before the gross slip"),
+              (k, "final", "after the gross slip")]
+    frames, labels, when = [], [], []
+    for step, which, label in chosen:
+        suffix = "_before_wave" if which == "before_wave" else ""
+        u = np.concatenate([simulation[f"ux{suffix}"].values[step],
+                            simulation[f"uy{suffix}"].values[step]])
+        frames.append(image.render(image.stress(u), rng))
+        labels.append(label)
+        when.append(float(times[step - 1] if which == "before_wave" and step > 0
+                          else times[step]))
+    return xr.Dataset(
+        {"frame": (("frame", "row", "column"), np.stack(frames),
+                   {"long_name": "simulated photoelastic frame (no noise)", "units": "1"}),
+         "frame_time": ("frame", np.array(when), {"units": "s",
+                                                  "long_name": "time of the state shown"}),
+         "frame_label": ("frame", np.array(labels, dtype=str))})

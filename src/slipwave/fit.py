@@ -1,0 +1,869 @@
+"""The fit stage: a test's friction law, fitted on its slip events through the solver.
+
+A law's parameters are found by weighted least squares on event features: T/|N|
+before and after each gross slip, their times, the numbers of gross and partial slips
+(:func:`feature_residuals`). Each evaluation runs the solver along the test's own
+load path (:meth:`slipwave.bench.setup.TestSetup.bench_test`), so a fit costs tens of
+simulations; they are cached by parameters within a fit. The search is derivative-free
+(a scan, then Nelder-Mead): the features are piecewise smooth in the parameters (a
+partial slip more or less changes the history), which finite-difference Jacobians do
+not survive. 95 % intervals join the Gauss-Newton covariance of the residuals' secant
+slopes (two runs per parameter, a few partial slips apart) with the region where the
+misfit rises by less than 3.84, both scaled by the reduced misfit when the law does not
+reach the noise; laws are compared by Akaike's criterion (AIC).
+
+Fitted coefficients belong to the mesh they were fitted with (``elements``): the
+contact's corner concentrates the stress, so T/|N| at a gross slip for a given fs
+changes with the element size (see the README).
+
+Examples
+--------
+>>> law_of("slip-weakening", {"fs": 1.0, "fd": 0.6, "dc": 0.2})
+SlipWeakening(fs=1.0, fd=0.6, fs_final=None, runin_slips=0, dc=0.2)
+"""
+
+from __future__ import annotations
+
+import json
+import time as clock
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+from scipy.optimize import minimize
+
+from slipwave.bench.sensors import clean_signals
+from slipwave.bench.setup import TestSetup
+from slipwave.cache import DiskCache
+from slipwave.defaults import FIT_ELEMENTS, FIT_MAX_EVALUATIONS, LOAD_CALIBRATION
+from slipwave.errors import SlipwaveError
+from slipwave.events.detect import detect_events
+from slipwave.solver import Coulomb, SlipWeakening, condense, simulate
+
+LAWS: dict[str, tuple[str, ...]] = {
+    "coulomb": ("fs", "fd"),
+    "run-in": ("fs", "fd", "fs_final", "runin_slips"),
+    "slip-weakening": ("fs", "fd", "dc"),
+}
+"""The friction laws a test is fitted with, and their parameters."""
+
+UNITS = {"fs": "1", "fd": "1", "fs_final": "1", "runin_slips": "gross slips", "dc": "mm"}
+
+BOUNDS = {"fs": (0.05, 3.0), "fd": (0.02, 2.5), "fs_final": (0.05, 3.0),
+          "runin_slips": (1.0, 12.0), "dc": (0.002, 5.0)}
+"""Search bounds of each parameter."""
+
+RATIO_SIGMA = 0.005
+"""Uncertainty given to a T/|N| at a slip: the card's noise over a few samples and the
+onset's sampling."""
+TIME_SIGMA_S = 1.0
+"""Uncertainty given to a gross slip's time, s."""
+PARTIAL_SIGMA = 0.25
+"""Relative uncertainty of the number of partial slips (several small slips of the
+model may fall in one detected drop, and the smallest hide in the noise)."""
+MAX_GROSS = 15
+"""Gross slips whose loads and times are fitted one by one (the rest by their count)."""
+REJECTED_AIC = 10.0
+"""A law whose AIC exceeds the best one's by more is rejected (Burnham & Anderson: no
+support)."""
+
+
+@dataclass(frozen=True)
+class SlipFeatures:
+    """What a fit compares: gross slips one by one, partial slips by their number.
+
+    Attributes
+    ----------
+    gross
+        One row per gross slip: ``t_start`` (s), ``ratio_before``, ``ratio_after``,
+        ``drop`` (N).
+    partial_slips
+        Partial slips at least ``min_drop`` large.
+    min_drop
+        The smallest drop counted, N.
+    duration
+        The recording's length, s.
+    sample_rate
+        The card's sampling rate, Hz.
+
+    """
+
+    gross: pd.DataFrame
+    partial_slips: int
+    min_drop: float
+    duration: float
+    sample_rate: float
+
+
+_GROSS_COLUMNS = ("t_start", "ratio_before", "ratio_after", "drop")
+
+WAVE_SPEED_MM_S = 200.0
+"""How fast a simulated slip crosses its extent in the simulated recording (the
+quasi-static solver has no time): it sets a drop's duration, as the virtual bench's."""
+
+
+def edge_threshold(simulation: xr.Dataset, *, edge_reference: str = "frame") -> float:
+    """The DG/DD jump ratio that tells this test's gross slips from its partial ones.
+
+    Read off the simulation's own slips: the smallest ratio of a gross slip and the
+    largest ratio, below it, of a partial slip whose far-edge jump shows (a fifth of
+    the gross slips' median or more); the threshold is their geometric mean, half the
+    smallest gross ratio if no partial slip moves the far edge. (A partial slip that
+    stops just short of the far edge moves it as a gross slip does: it cannot be told
+    by the edges, and is left out.) Jumps are along +x, in the frame the edge sensors
+    read against: ``flat`` subtracts the flat's jump (the sensors then see the slip).
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate` along the test's load path.
+    edge_reference
+        ``frame`` or ``flat`` (:data:`slipwave.bench.setup.EDGE_REFERENCES`).
+
+    Returns
+    -------
+    float
+        The ratio (``--gross-edge-ratio`` of ``slipwave detect``).
+
+    Raises
+    ------
+    SlipwaveError
+        If the simulation has no gross slip to read it from.
+
+    """
+    wave = simulation["wave"].values
+    tangential = simulation["phase"].values == "tangential"
+    flat = simulation["DT"].values - simulation["DT_before_wave"].values
+    jumps = {}
+    for channel in ("DG", "DD"):
+        jump = simulation[channel].values - simulation[f"{channel}_before_wave"].values
+        jumps[channel] = jump - flat if edge_reference == "flat" else jump
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = jumps["DG"] / jumps["DD"]
+    gross = tangential & (wave == "gross") & np.isfinite(ratio)
+    if not gross.any():
+        raise SlipwaveError("the simulation has no gross slip to set the edge threshold by")
+    lowest = float(ratio[gross].min())
+    shows = 0.2 * np.median(np.abs(jumps["DG"][gross]))
+    partial = tangential & (wave == "partial") & (np.abs(jumps["DG"]) >= shows) & np.isfinite(
+        ratio)
+    if not partial.any():
+        return 0.5 * lowest
+    below = ratio[partial][ratio[partial] < lowest]
+    if not below.size or below.max() <= 0:
+        return 0.5 * lowest
+    return float(np.sqrt(lowest * below.max()))
+
+
+def slip_features(events: pd.DataFrame, *, gross_edge_ratio: float, min_drop: float,
+                  duration: float, sample_rate: float) -> SlipFeatures:
+    """Features of detected events, gross slips told by their edge jumps.
+
+    A drop is a gross slip when the far edge's jump is significant (at least the
+    detection's ``DG_min_jump``, from ``events.attrs``; any, without it) and its ratio
+    to the near edge's is at least ``gross_edge_ratio`` (as
+    :func:`~slipwave.events.classify_events` decides).
+
+    Parameters
+    ----------
+    events
+        From :func:`~slipwave.events.detect_events`.
+    gross_edge_ratio
+        The test's threshold (:func:`edge_threshold`).
+    min_drop, duration, sample_rate
+        As in :class:`SlipFeatures`.
+
+    Returns
+    -------
+    SlipFeatures
+        The gross slips and the number of partial ones.
+
+    """
+    if events.empty:
+        return SlipFeatures(pd.DataFrame(columns=list(_GROSS_COLUMNS)), 0, min_drop, duration,
+                            sample_rate)
+    significant = np.abs(events["DG_jump"].to_numpy(dtype=float)) >= events.attrs.get(
+        "DG_min_jump", 0.0)
+    gross = significant & (events["edge_ratio"].to_numpy(dtype=float) >= gross_edge_ratio)
+    return SlipFeatures(events.loc[gross, list(_GROSS_COLUMNS)].reset_index(drop=True),
+                        int((~gross).sum()), min_drop, duration, sample_rate)
+
+
+def measured_events(recording: xr.Dataset, *, edge_convention: str = "auto") -> pd.DataFrame:
+    """A recording's events for a fit: every T drop with its loads and edge jumps.
+
+    Parameters
+    ----------
+    recording
+        From :func:`slipwave.io.read_acquisition`.
+    edge_convention
+        Passed to :func:`~slipwave.events.detect_events`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :func:`~slipwave.events.detect_events`'s table (its ``kind`` is not used: the
+        fit classifies with the simulation's threshold).
+
+    Raises
+    ------
+    SlipwaveError
+        If the recording has no slip, no N (T/|N| unknown) or no DG/DD.
+
+    """
+    events = detect_events(recording, edge_convention=edge_convention)
+    source = recording.attrs.get("test_id", recording.attrs.get("source", "the recording"))
+    if events.empty:
+        raise SlipwaveError(f"test {source!r}: no slip in the recording, nothing to fit")
+    if events["ratio_before"].isna().all():
+        raise SlipwaveError(f"test {source!r}: no N channel, T/|N| unknown: nothing to fit")
+    if events["DG_jump"].isna().all() or events["DD_jump"].isna().all():
+        raise SlipwaveError(f"test {source!r}: no DG and DD channels: gross slips cannot be "
+                            "told from partial ones, nothing to fit")
+    time = recording["time"].values
+    events.attrs["duration"] = float(time[-1] - time[0])
+    events.attrs["sample_rate"] = float(1.0 / np.median(np.diff(time)))
+    return events
+
+
+def simulated_events(simulation: xr.Dataset, setup: TestSetup, *, min_drop: float,
+                     sample_rate: float) -> pd.DataFrame:
+    """A simulation's events, detected as the measurement's are.
+
+    The simulation becomes a noise-free recording sampled like the test
+    (:func:`slipwave.bench.sensors.clean_signals`, its edges in the test's edge
+    reference) and goes through the same detection, so that what detection does to a
+    slip (a trough read as the reloading starts, a peak between samples) is on both
+    sides of the comparison.
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate` with the test's bench spec.
+    setup
+        The test's setup (speed, normal loading time, duration, edge reference).
+    min_drop
+        The measurement's smallest drop, N.
+    sample_rate
+        The card's sampling rate, Hz.
+
+    Returns
+    -------
+    pandas.DataFrame
+        As :func:`~slipwave.events.detect_events`.
+
+    """
+    recording = clean_signals(simulation, speed=setup["speed_mm_s"],
+                              loading_time=setup["loading_time_s"],
+                              duration=setup["duration_s"], sample_rate=sample_rate,
+                              wave_speed=WAVE_SPEED_MM_S)
+    if setup.edge_reference == "flat":
+        for channel in ("DG", "DD"):
+            recording[channel] = recording[channel] - recording["DT"]
+    recording.attrs["test_id"] = setup.test_id
+    return detect_events(recording, min_drop=min_drop, edge_convention="x_axis")
+
+
+def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
+                      calibration_error: float = 0.0) -> np.ndarray:
+    """Weighted differences simulated - measured, one per feature.
+
+    T/|N| before and after each of the first :data:`MAX_GROSS` measured gross slips
+    (:data:`RATIO_SIGMA`) and their times (:data:`TIME_SIGMA_S`), paired in order; a
+    gross slip the simulation lacks counts as T/|N| 0.1 away and its time as the
+    recording's end. Then the numbers of gross slips (one slip) and of partial slips
+    (:data:`PARTIAL_SIGMA`).
+
+    With ``calibration_error``, the load cells' calibration is a nuisance: every
+    simulated T/|N| is scaled by (1 + c), c of standard deviation
+    sqrt(2) ``calibration_error`` (the T and N cells), and c is profiled out in
+    closed form; its prior c / sd is the last residual. A scale error common to
+    every T/|N| then moves the coefficients as far as the data allow, and the
+    intervals widen by as much, whatever the sensitivity of T/|N| to each parameter.
+
+    Parameters
+    ----------
+    simulated, measured
+        From :func:`slip_features`.
+    calibration_error
+        Relative calibration uncertainty of each load cell; 0: none.
+
+    Returns
+    -------
+    numpy.ndarray
+        The residuals, each in units of its uncertainty.
+
+    Examples
+    --------
+    >>> gross = pd.DataFrame({"t_start": [10.0], "ratio_before": [0.7],
+    ...                       "ratio_after": [0.6], "drop": [8.0]})
+    >>> one = SlipFeatures(gross, 2, 0.3, 60.0, 100.0)
+    >>> feature_residuals(one, one).tolist()
+    [0.0, 0.0, 0.0, 0.0, 0.0]
+    """
+    m = measured.gross.iloc[:MAX_GROSS]
+    s = simulated.gross
+    k = len(m)
+    ratios = np.zeros(2 * k)  # simulated T/|N| of the paired slips (0 where unpaired)
+    offsets = np.full(2 * k, 0.1)  # simulated - measured; a missing slip: 0.1
+    shared = min(k, len(s))
+    for j, column in enumerate(("ratio_before", "ratio_after")):
+        ratios[j * k:j * k + shared] = s[column].to_numpy()[:shared]
+        offsets[j * k:j * k + shared] = (s[column].to_numpy()[:shared]
+                                         - m[column].to_numpy()[:shared])
+    t = np.empty(k)
+    t[:shared] = s["t_start"].to_numpy()[:shared] - m["t_start"].to_numpy()[:shared]
+    t[shared:] = measured.duration - m["t_start"].to_numpy()[shared:]
+    counts = [len(s) - len(measured.gross),
+              (simulated.partial_slips - measured.partial_slips)
+              / max(3.0, PARTIAL_SIGMA * measured.partial_slips)]
+    a, d = ratios / RATIO_SIGMA, offsets / RATIO_SIGMA
+    prior: list[float] = []
+    if calibration_error > 0:
+        spread = np.sqrt(2.0) * calibration_error
+        c = -float(a @ d) / (float(a @ a) + spread**-2)
+        d = d + c * a
+        prior = [c / spread]
+    return np.concatenate([d, t / TIME_SIGMA_S, counts, prior])
+
+
+def law_of(name: str, params: Mapping[str, float]) -> Coulomb:
+    """The solver's friction law of a fitted law's name and parameters.
+
+    Parameters
+    ----------
+    name
+        One of :data:`LAWS`.
+    params
+        Its parameters.
+
+    Returns
+    -------
+    Coulomb
+        :class:`~slipwave.solver.Coulomb` (with run-in) or
+        :class:`~slipwave.solver.SlipWeakening`.
+
+    """
+    if name == "coulomb":
+        return Coulomb(fs=params["fs"], fd=params["fd"])
+    if name == "run-in":
+        return Coulomb(fs=params["fs"], fd=params["fd"], fs_final=params["fs_final"],
+                       runin_slips=params["runin_slips"])  # type: ignore[arg-type]
+    if name == "slip-weakening":
+        return SlipWeakening(fs=params["fs"], fd=params["fd"], dc=params["dc"])
+    raise SlipwaveError(f"unknown friction law {name!r}; known: {', '.join(LAWS)}")
+
+
+@dataclass
+class LawFit:
+    """One law fitted to one test.
+
+    Attributes
+    ----------
+    law
+        Its name (:data:`LAWS`).
+    values, low, high
+        Each parameter's estimate and 95 % interval.
+    misfit
+        The weighted sum of squared residuals at the estimate (chi-square).
+    features
+        How many residuals.
+    aic
+        misfit + 2 k, k the number of parameters.
+    evaluations
+        Simulations run.
+    seconds
+        Time the fit took.
+    interval_method
+        ``secant`` (the Gauss-Newton covariance of the residuals' secant slopes,
+        joined with :func:`_intervals`' region), or ``curvature``, ``axes``,
+        ``evaluations`` (:func:`_intervals`) when a secant could not be run.
+    edge_threshold
+        The gross/partial edge-jump ratio of the simulation at the estimate.
+
+    """
+
+    law: str
+    values: dict[str, float]
+    low: dict[str, float]
+    high: dict[str, float]
+    misfit: float
+    features: int
+    aic: float
+    evaluations: int
+    seconds: float
+    interval_method: str
+    edge_threshold: float
+    history: list[tuple[tuple[float, ...], float]] = field(default_factory=list, repr=False)
+    features_by_parameters: dict[tuple[float, ...], SlipFeatures] = field(
+        default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fit in plain types (no history).
+
+        Returns
+        -------
+        dict
+            ``law``, ``parameters`` (value, low, high, units), ``misfit``, ``features``,
+            ``aic``, ``evaluations``, ``seconds``, ``interval_method``,
+            ``edge_threshold``.
+
+        """
+        return {"law": self.law,
+                "parameters": {name: {"value": round(self.values[name], 6),
+                                      "low": round(self.low[name], 6),
+                                      "high": round(self.high[name], 6),
+                                      "units": UNITS[name]} for name in self.values},
+                "misfit": round(self.misfit, 4), "features": self.features,
+                "aic": round(self.aic, 4), "evaluations": self.evaluations,
+                "seconds": round(self.seconds, 2), "interval_method": self.interval_method,
+                "edge_threshold": round(self.edge_threshold, 4)}
+
+
+class _Objective:
+    """The misfit of one law on one test, its simulations cached by parameters.
+
+    Gross slips are told from partial ones by one edge threshold for the whole fit
+    (``threshold``), so that every law is judged on the same measured features.
+    """
+
+    def __init__(self, setup: TestSetup, measured: pd.DataFrame, law: str, elements: int,
+                 threshold: float, calibration_error: float):
+        self.setup, self.law, self.elements = setup, law, elements
+        self.calibration_error = calibration_error
+        self.names = LAWS[law]
+        self.sizes = {"min_drop": float(measured.attrs.get("min_drop", 0.0)),
+                      "duration": float(measured.attrs["duration"]),
+                      "sample_rate": float(measured.attrs["sample_rate"])}
+        self.threshold = threshold
+        self.measured = slip_features(measured, gross_edge_ratio=threshold, **self.sizes)
+        self.history: list[tuple[tuple[float, ...], float]] = []
+        self.features: dict[tuple[float, ...], SlipFeatures] = {}
+        self.cache: dict[tuple[float, ...], float] = {}
+        spec = setup.bench_test(Coulomb(fs=1.0), elements=elements)
+        self.condensed = condense(spec.slab(), store=DiskCache())
+
+    def clip(self, theta: Sequence[float]) -> tuple[float, ...]:
+        values = dict(zip(self.names, (float(v) for v in theta), strict=True))
+        for name, (low, high) in BOUNDS.items():
+            if name in values:
+                values[name] = min(max(values[name], low), high)
+        # the law's own order: fd <= fs (and <= fs_final)
+        values["fd"] = min(values["fd"], values["fs"] - 1e-3)
+        if "fs_final" in values:
+            values["fs_final"] = max(values["fs_final"], values["fd"] + 1e-3)
+        return tuple(round(values[name], 6) for name in self.names)
+
+    def simulated(self, theta: tuple[float, ...]) -> SlipFeatures:
+        params = dict(zip(self.names, theta, strict=True))
+        spec = self.setup.bench_test(law_of(self.law, params), elements=self.elements)
+        simulation = simulate(spec.slab(), spec.friction(), spec.load_path(),
+                              condensed=self.condensed)
+        events = simulated_events(simulation, self.setup, min_drop=self.sizes["min_drop"],
+                                  sample_rate=self.sizes["sample_rate"])
+        return slip_features(events, gross_edge_ratio=self.threshold, **self.sizes)
+
+    def __call__(self, theta: Sequence[float]) -> float:
+        key = self.clip(theta)
+        if key not in self.cache:
+            try:
+                features = self.simulated(key)
+            except SlipwaveError:
+                misfit = np.inf  # a law the solver cannot follow: not a candidate
+            else:
+                self.features[key] = features
+                misfit = float(np.sum(feature_residuals(
+                    features, self.measured, calibration_error=self.calibration_error) ** 2))
+            self.cache[key] = misfit
+            self.history.append((key, misfit))
+        return self.cache[key]
+
+
+def _fd_start(measured: pd.DataFrame) -> float:
+    """T/|N| after the largest quarter of the drops: the dynamic coefficient's start."""
+    largest = measured["drop"] >= measured["drop"].quantile(0.75)
+    return float(np.clip(measured.loc[largest, "ratio_after"].median(), *BOUNDS["fd"]))
+
+
+def _closest(scan: Mapping[tuple[float, ...], SlipFeatures], target: float,
+             which: slice) -> float:
+    """The scanned fs whose simulated T/|N| before the chosen gross slips is nearest."""
+    best, distance = float("nan"), np.inf
+    for theta, features in scan.items():
+        ratios = features.gross["ratio_before"].to_numpy()[which]
+        if ratios.size and abs(np.median(ratios) - target) < distance:
+            best, distance = theta[0], abs(np.median(ratios) - target)
+    return best
+
+
+def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
+            previous: Mapping[str, LawFit], scan: Mapping[tuple[float, ...], SlipFeatures]
+            ) -> Sequence[tuple[float, ...]]:
+    """Starting points of a law's search.
+
+    Coulomb: a scan of fs at the measured T/|N| after the largest drops (T/|N| at
+    gross slips is not monotonic in fs, since the partial slips before it change with
+    fs: a scan finds the right valley, a gradient does not). Run-in: fs_final from the
+    scanned Coulomb run whose gross slips match the measured later ones, the number of
+    slips until the measured T/|N| settles, and a scan of fs below fs_final.
+    Slip-weakening: around Coulomb's optimum with a few Dc.
+    """
+    fd = _fd_start(measured)
+    coulomb = previous.get("coulomb")
+    if law == "coulomb" or coulomb is None:
+        return [(fd + excess, fd) for excess in np.arange(0.05, 0.81, 0.05)]
+    fs, fd = coulomb.values["fs"], coulomb.values["fd"]
+    if law == "run-in":
+        ratios = objective.measured.gross["ratio_before"].to_numpy()
+        if ratios.size < 2:
+            return [(fs, fd, fs, 1.0)]
+        later = slice(ratios.size // 2, None)
+        # the later gross slips settle at fs_final: the scanned Coulomb run that matches
+        # them, or Coulomb's optimum; fs, the first slips' coefficient, is scanned below
+        final = _closest(scan, float(np.median(ratios[later])), later) if scan else fs
+        final = fs if not np.isfinite(final) else final
+        settled = np.abs(ratios - np.median(ratios[later])) <= 0.01
+        runin = float(np.clip(np.argmax(settled), 1, 8))
+        firsts = np.arange(fd + 0.05, max(final, fd + 0.06), 0.05)
+        return [(float(first), fd, float(max(final, first)), runin) for first in firsts] + [
+            (fs, fd, fs, 1.0)]
+    return [(fs, fd, dc) for dc in (0.01, 0.03, 0.1, 0.3)]
+
+
+_SIMPLEX = {"fs": 0.02, "fd": 0.005, "fs_final": 0.03, "runin_slips": 1.0, "dc": 0.03}
+
+
+def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
+            threshold: float, elements: int = FIT_ELEMENTS,
+            max_evaluations: int = FIT_MAX_EVALUATIONS,
+            previous: Mapping[str, LawFit] | None = None,
+            scan: Mapping[tuple[float, ...], SlipFeatures] | None = None,
+            calibration_error: float = LOAD_CALIBRATION) -> LawFit:
+    """Fit one friction law to one test.
+
+    Parameters
+    ----------
+    setup
+        The test's configuration (:func:`slipwave.bench.setup.read_test_setup`).
+    measured
+        Its events (:func:`measured_events`).
+    law
+        One of :data:`LAWS`.
+    threshold
+        The edge-jump ratio that tells gross slips (:func:`edge_threshold`).
+    elements
+        Elements along the contact in every simulation.
+    max_evaluations
+        Simulations of the Nelder-Mead search (the starting points add a few).
+    previous
+        Laws already fitted: the richer laws start around Coulomb's optimum.
+    scan
+        Coulomb's simulated features by parameters, for the run-in's start.
+    calibration_error
+        Relative calibration uncertainty of each load cell (:data:`LOAD_CALIBRATION`).
+
+    Returns
+    -------
+    LawFit
+        Estimates, 95 % intervals, misfit and AIC.
+
+    Raises
+    ------
+    SlipwaveError
+        If no simulation of the law could be run.
+
+    """
+    began = clock.perf_counter()
+    objective = _Objective(setup, measured, law, elements, threshold, calibration_error)
+    starts = _starts(law, objective, measured, previous or {}, scan or {})
+    best = min(starts, key=objective)
+    scale = np.array([_SIMPLEX[name] for name in LAWS[law]])
+    simplex = np.vstack([best, best + np.diag(scale)])
+    minimize(objective, np.asarray(best), method="Nelder-Mead",
+             options={"initial_simplex": simplex, "maxfev": max_evaluations,
+                      "xatol": 1e-3, "fatol": 0.5})
+    finite = [(theta, misfit) for theta, misfit in objective.history if np.isfinite(misfit)]
+    if not finite:
+        raise SlipwaveError(f"test {setup.test_id!r}: the solver followed no {law} law tried")
+    theta, misfit = min(finite, key=lambda item: item[1])
+    # The residuals on both sides of the optimum along each parameter, a secant's width
+    # apart: the misfit is rough at the scale of one partial slip more or less, so the
+    # sensitivity that matters is the trend across several, not the local curvature.
+    names = LAWS[law]
+    centre = np.asarray(theta)
+    secant = 2.0 * scale
+    jacobian = []
+    for k in range(len(theta)):
+        ends = [objective.clip(centre + sign * secant[k] * np.eye(len(theta))[k])
+                for sign in (-1.0, 1.0)]
+        for end in ends:
+            objective(end)
+        if all(end in objective.features for end in ends) and ends[0][k] != ends[1][k]:
+            below, above = (feature_residuals(objective.features[end], objective.measured,
+                                              calibration_error=calibration_error)
+                            for end in ends)
+            jacobian.append((above - below) / (ends[1][k] - ends[0][k]))
+        else:
+            jacobian.append(None)
+    history = [(point, value) for point, value in objective.history if np.isfinite(value)]
+    theta, misfit = min(history, key=lambda item: item[1])
+    features = 3 * min(len(objective.measured.gross), MAX_GROSS) + 2
+    low, high, method = _intervals(history, theta, misfit, features)
+    if all(column is not None for column in jacobian):
+        matrix = np.column_stack(jacobian)
+        reduced = max(1.0, misfit / max(1, features - len(theta)))
+        try:
+            covariance = np.linalg.inv(matrix.T @ matrix) * reduced
+        except np.linalg.LinAlgError:
+            covariance = None
+        if covariance is not None and np.all(np.diag(covariance) > 0):
+            half = 1.96 * np.sqrt(np.diag(covariance))
+            low = [min(a, t - h) for a, t, h in zip(low, theta, half, strict=True)]
+            high = [max(b, t + h) for b, t, h in zip(high, theta, half, strict=True)]
+            method = "secant"
+    for k, name in enumerate(names):
+        bounds = BOUNDS[name]
+        low[k], high[k] = max(low[k], bounds[0]), min(high[k], bounds[1])
+    fit = LawFit(law, dict(zip(names, theta, strict=True)), dict(zip(names, low, strict=True)),
+                 dict(zip(names, high, strict=True)), misfit, features,
+                 misfit + 2 * len(names), len(objective.history),
+                 clock.perf_counter() - began, method, threshold, history)
+    fit.features_by_parameters = objective.features
+    return fit
+
+
+def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *,
+                    elements: int = FIT_ELEMENTS) -> float:
+    """The test's edge threshold from one Coulomb run at plausible coefficients.
+
+    What separates a gross slip's edge jumps from a partial slip's is the slab's shape
+    (how the far edge follows); one simulation at fd from the largest drops and fs 0.3
+    above sets it for the whole fit.
+
+    Parameters
+    ----------
+    setup, measured, elements
+        As in :func:`fit_law`.
+
+    Returns
+    -------
+    float
+        :func:`edge_threshold` of that run.
+
+    """
+    fd = _fd_start(measured)
+    spec = setup.bench_test(Coulomb(fs=fd + 0.3, fd=fd), elements=elements)
+    simulation = simulate(spec.slab(), spec.friction(), spec.load_path(),
+                          condensed=condense(spec.slab(), store=DiskCache()))
+    return edge_threshold(simulation, edge_reference=setup.edge_reference)
+
+
+def _intervals(history: list[tuple[tuple[float, ...], float]], best: tuple[float, ...],
+               misfit: float, features: int) -> tuple[list[float], list[float], str]:
+    """95 % intervals of the parameters: the misfit's curvature, and where it rises.
+
+    Two estimates, and each interval covers both. (1) A quadratic in the parameters
+    fitted (least squares) to the evaluations whose misfit lies within 10 of the best:
+    its Hessian H gives the covariance 2 H^-1 ("curvature"); where H is not positive
+    definite, each parameter's parabola through the optimum and its two axis
+    neighbours ("axes"). (2) The likelihood-ratio region: the range of the evaluated
+    values whose misfit lies within 3.84 of the best, interpolated out to the nearest
+    evaluation beyond ("evaluations"). Both scale by the reduced misfit when that
+    exceeds 1 (the law misses by more than the noise). The misfit is rough at the
+    scale of one partial slip more or less, so a curvature can be steeper than the
+    rise it predicts; the union keeps the interval honest.
+    """
+    points = np.array([theta for theta, _ in history])
+    values = np.array([value for _, value in history])
+    p = points.shape[1]
+    reduced = max(1.0, misfit / max(1, features - p))
+    centre = np.asarray(best)
+    span = np.maximum(np.ptp(points, axis=0), 1e-9)
+    rise = 3.84 * reduced
+    # (2) the likelihood-ratio region along each parameter
+    low, high = [], []
+    for j in range(p):
+        order = np.argsort(points[:, j])
+        theta, excess = points[order, j], values[order] - misfit
+        inside = np.flatnonzero(excess <= rise)
+        first, last = inside.min(), inside.max()
+        lo, hi = theta[first], theta[last]
+        if first > 0 and excess[first - 1] > excess[first]:
+            lo = np.interp(rise, [excess[first], excess[first - 1]],
+                           [theta[first], theta[first - 1]])
+        if last + 1 < theta.size and excess[last + 1] > excess[last]:
+            hi = np.interp(rise, [excess[last], excess[last + 1]], [theta[last], theta[last + 1]])
+        low.append(float(min(lo, centre[j])))
+        high.append(float(max(hi, centre[j])))
+    # (1) the curvature
+    half = np.full(p, np.nan)
+    method = "evaluations"
+    near = values <= misfit + 10.0 * reduced
+    if near.sum() >= 2 + p + p * (p + 1) // 2:
+        d = (points[near] - centre) / span
+        columns = [np.ones(d.shape[0])] + [d[:, i] for i in range(p)]
+        pairs = [(i, j) for i in range(p) for j in range(i, p)]
+        columns += [d[:, i] * d[:, j] * (0.5 if i == j else 1.0) for i, j in pairs]
+        coefficients, *_ = np.linalg.lstsq(np.column_stack(columns), values[near], rcond=None)
+        hessian = np.zeros((p, p))
+        for (i, j), c in zip(pairs, coefficients[1 + p:], strict=True):
+            hessian[i, j] = hessian[j, i] = c
+        if np.all(np.linalg.eigvalsh(hessian) > 0):
+            half = 1.96 * np.sqrt(np.diag(2.0 * np.linalg.inv(hessian) * reduced)) * span
+            method = "curvature"
+    if method != "curvature":
+        for j in range(p):
+            others = np.all(np.isclose(np.delete(points, j, axis=1), np.delete(centre, j)),
+                            axis=1)
+            offsets = points[others, j] - centre[j]
+            below, above = offsets < 0, offsets > 0
+            if not (below.any() and above.any()):
+                continue
+            k0 = np.flatnonzero(below)[np.argmax(offsets[below])]
+            k1 = np.flatnonzero(above)[np.argmin(offsets[above])]
+            h0, h1 = -offsets[k0], offsets[k1]
+            m0, m1 = values[others][k0] - misfit, values[others][k1] - misfit
+            curvature = 2.0 * (m0 / h0 + m1 / h1) / (h0 + h1)  # the second derivative
+            if curvature > 0:
+                half[j] = 1.96 * np.sqrt(2.0 * reduced / curvature)
+                method = "axes"
+    for j in range(p):
+        if np.isfinite(half[j]):
+            low[j] = min(low[j], centre[j] - half[j])
+            high[j] = max(high[j], centre[j] + half[j])
+    return low, high, method
+
+
+def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = tuple(LAWS),
+             elements: int = FIT_ELEMENTS, max_evaluations: int = FIT_MAX_EVALUATIONS,
+             calibration_error: float = LOAD_CALIBRATION) -> dict[str, Any]:
+    """Fit every law to a test and choose by AIC.
+
+    Parameters
+    ----------
+    setup, measured
+        As in :func:`fit_law`.
+    laws
+        The laws to fit (Coulomb first: the others start from it).
+    elements, max_evaluations, calibration_error
+        As in :func:`fit_law`.
+
+    Returns
+    -------
+    dict
+        ``test_id``, ``setup`` (every value with its source), ``elements``,
+        ``measured`` (gross and partial slip counts), ``laws`` (each
+        :meth:`LawFit.to_dict` with ``delta_aic`` and ``rejected``), ``chosen`` (the
+        lowest AIC) and ``parameters`` (the chosen law's values).
+
+    """
+    unknown = [law for law in laws if law not in LAWS]
+    if unknown:
+        raise SlipwaveError(f"unknown friction law(s) {unknown}; known: {', '.join(LAWS)}")
+    ordered = sorted(laws, key=list(LAWS).index)
+    fits: dict[str, LawFit] = {}
+    threshold = probe_threshold(setup, measured, elements=elements)
+    for law in ordered:
+        scan = fits["coulomb"].features_by_parameters if "coulomb" in fits else None
+        fits[law] = fit_law(setup, measured, law, threshold=threshold, elements=elements,
+                            max_evaluations=max_evaluations, previous=fits, scan=scan,
+                            calibration_error=calibration_error)
+    best = min(fits.values(), key=lambda fit: fit.aic)
+    laws_out = {}
+    for law, fit in fits.items():
+        entry = fit.to_dict()
+        entry["delta_aic"] = round(fit.aic - best.aic, 4)
+        entry["rejected"] = bool(fit.aic - best.aic > REJECTED_AIC)
+        laws_out[law] = entry
+    return {"test_id": setup.test_id, "setup": setup.to_dict(), "elements": elements,
+            "load_calibration": calibration_error,
+            "measured": {"slips": len(measured),
+                         "gross_slips": len(slip_features(
+                             measured, gross_edge_ratio=threshold, min_drop=0.0,
+                             duration=0.0, sample_rate=0.0).gross),
+                         "min_drop_n": round(float(measured.attrs.get("min_drop", 0.0)), 6)},
+            "edge_threshold": round(threshold, 4),
+            "laws": laws_out, "chosen": best.law,
+            "parameters": {name: round(value, 6) for name, value in best.values.items()}}
+
+
+def chosen_law(fit: Mapping[str, Any]) -> Coulomb:
+    """The solver's law of a fit's chosen law (``fit.json`` as a mapping).
+
+    Parameters
+    ----------
+    fit
+        From :func:`fit_test` (or its JSON).
+
+    Returns
+    -------
+    Coulomb
+        The law.
+
+    """
+    return law_of(fit["chosen"], fit["parameters"])
+
+
+def read_fit(path: str) -> dict[str, Any]:
+    """A ``fit.json``, with an error naming the file when it is not one.
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    dict
+        Its content (:func:`fit_test`).
+
+    """
+    try:
+        with open(path, encoding="utf-8") as stream:
+            fit = json.load(stream)
+    except (OSError, json.JSONDecodeError) as err:
+        raise SlipwaveError(f"{path}: cannot read the fit: {err}") from err
+    if not isinstance(fit, dict) or "chosen" not in fit or "parameters" not in fit:
+        raise SlipwaveError(f"{path}: not a fit (no 'chosen' law and 'parameters')")
+    return fit
+
+
+def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
+    """The campaign's fits, one row per test.
+
+    Parameters
+    ----------
+    fits
+        ``fit.json`` contents (:func:`fit_test`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``test_id``, ``height_ratio``, ``law`` (chosen), ``gross_slips``, each
+        parameter of each law as ``<law>_<name>``, ``_low``, ``_high``, each law's
+        ``<law>_delta_aic``, and the chosen law's ``fs``, ``fd`` with their intervals.
+
+    """
+    rows = []
+    for fit in fits:
+        setup = fit["setup"]
+        row: dict[str, Any] = {
+            "test_id": fit["test_id"],
+            "height_ratio": setup["height_mm"]["value"] / setup["length_mm"]["value"],
+            "law": fit["chosen"], "gross_slips": fit["measured"]["gross_slips"]}
+        chosen = fit["laws"][fit["chosen"]]["parameters"]
+        for name in ("fs", "fd"):
+            row[name] = chosen[name]["value"]
+            row[f"{name}_low"], row[f"{name}_high"] = chosen[name]["low"], chosen[name]["high"]
+        for law, entry in fit["laws"].items():
+            key = law.replace("-", "_")
+            row[f"{key}_delta_aic"] = entry["delta_aic"]
+            for name, value in entry["parameters"].items():
+                row[f"{key}_{name}"] = value["value"]
+                row[f"{key}_{name}_low"] = value["low"]
+                row[f"{key}_{name}_high"] = value["high"]
+        rows.append(row)
+    return pd.DataFrame(rows)

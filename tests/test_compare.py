@@ -1,0 +1,88 @@
+"""The simulate and compare stages: a test run again in the measurement's shape, and judged."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from slipwave.bench.generate import BenchTest, simulate_test
+from slipwave.bench.replay import replay_test
+from slipwave.bench.setup import read_test_setup
+from slipwave.compare import COMPARISON_COLUMNS, compare_test, place_on_map, verdict_counts
+from slipwave.events import detect_events
+from slipwave.io import CHANNELS
+from slipwave.solver import Coulomb
+
+CELLS = {"test_id": "v", "youngs_modulus_mpa": "7", "poisson_ratio": "0.48",
+         "edge_reference": "frame"}
+
+
+@pytest.fixture(scope="module")
+def test_and_replay():
+    spec = BenchTest("v", elements=24, duration=90.0, video="none", fs=0.9, fd=0.6,
+                     fs_final=None)
+    result = simulate_test(spec, seed=3)
+    setup = read_test_setup(result.recording, CELLS)
+    return result, setup, replay_test(setup, Coulomb(fs=0.9, fd=0.6), elements=24)
+
+
+def test_replay_is_a_recording_with_its_contact_history(test_and_replay):
+    result, _, replay = test_and_replay
+    recording = replay.recording
+    assert set(CHANNELS) - {"time"} <= set(recording.data_vars)
+    assert recording.sizes["time"] == result.recording.sizes["time"]
+    assert recording["T"].attrs["units"] == "N" and recording["time"].attrs["units"] == "s"
+    assert recording.attrs["gross_edge_ratio"] > 0
+    contact = replay.contact
+    assert contact["state"].dims == ("time", "x") and set(np.unique(contact["state"])) <= {
+        0, 1, 2}
+    assert np.all(np.diff(contact["time"].values) > 0)
+    assert contact["intensity"].dims == ("time", "x_image")
+    assert 0 <= float(contact["intensity"].min()) < float(contact["intensity"].max()) <= 255
+    assert contact["frame"].shape[0] == 4 and contact["frame"].dtype == np.uint8
+    assert list(contact["frame_label"].values)[-1] == "after the gross slip"
+
+
+def test_replay_in_the_flat_reference_subtracts_the_travel(test_and_replay):
+    _, setup, replay = test_and_replay
+    flat = type(setup)(setup.test_id, setup.settings, "flat")
+    again = replay_test(flat, Coulomb(fs=0.9, fd=0.6), elements=24, kymograph=False)
+    assert np.allclose(again.recording["DG"] + again.recording["DT"], replay.recording["DG"])
+    assert "intensity" not in again.contact
+
+
+def test_a_test_against_its_own_law_agrees_on_every_compared_feature(test_and_replay):
+    result, _, replay = test_and_replay
+    measured = detect_events(result.recording,
+                             gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    table = compare_test(measured, replay.recording, replay.simulation, min_drop=0.3)
+    assert list(table.columns) == list(COMPARISON_COLUMNS)
+    counts = verdict_counts(table)
+    assert counts["differs"] == 0, table[table["verdict"] == "differs"]
+    assert counts["agrees"] >= 10
+    assert set(table.loc[table["verdict"] == "not compared", "note"]) == {"no video"}
+
+
+def test_a_wrong_law_is_flagged(test_and_replay):
+    result, setup, _ = test_and_replay
+    wrong = replay_test(setup, Coulomb(fs=1.3, fd=0.45), elements=24, kymograph=False)
+    measured = detect_events(result.recording,
+                             gross_edge_ratio=wrong.recording.attrs["gross_edge_ratio"])
+    table = compare_test(measured, wrong.recording, wrong.simulation, min_drop=0.3)
+    verdicts = table.set_index("feature")["verdict"]
+    assert verdicts["T/|N| at gross slips, after (dynamic)"] == "differs"
+    assert verdict_counts(table)["differs"] >= 3
+
+
+def test_place_on_map_picks_the_nearest_case():
+    names = np.array(["ZD", "ZG"], dtype=object)
+    behaviour_map = xr.Dataset(
+        {"behaviour": (("height_ratio", "friction"), np.array([[1, 2], [2, 2]])),
+         "sequence": (("height_ratio", "friction"),
+                      np.array([["a", "b"], ["b", "b"]], dtype=object)),
+         "behaviour_name": ("behaviour_id", names)},
+        coords={"height_ratio": [0.25, 0.5], "friction": [0.5, 1.0], "behaviour_id": [1, 2]})
+    place = place_on_map(behaviour_map, 0.3, 0.6)
+    assert place["behaviour"] == "ZD" and place["map_friction"] == 0.5
+    assert place["inside_map"] and not place_on_map(behaviour_map, 0.3, 1.6)["inside_map"]

@@ -1,0 +1,146 @@
+"""The fit stage: features, thresholds, intervals, and a law recovered from a virtual test."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from slipwave.bench.generate import BenchTest, simulate_test, write_test
+from slipwave.bench.setup import TestSetup, read_test_setup
+from slipwave.cli import main
+from slipwave.errors import SlipwaveError
+from slipwave.fit import (
+    _intervals,
+    edge_threshold,
+    feature_residuals,
+    fit_test,
+    fits_table,
+    law_of,
+    measured_events,
+    slip_features,
+)
+from slipwave.io import read_acquisition
+
+CELLS = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
+TRUTH = {"fs": 0.9, "fd": 0.6}
+
+
+@pytest.fixture(scope="module")
+def virtual(tmp_path_factory):
+    """A short Coulomb test on a coarse mesh: its files and its truth."""
+    spec = BenchTest("v", elements=24, duration=90.0, video="none", fs_final=None, **TRUTH)
+    result = simulate_test(spec, seed=5)
+    folder = tmp_path_factory.mktemp("virtual")
+    paths = write_test(result, folder)
+    return result, paths["csv"]
+
+
+def test_edge_threshold_lies_between_partial_and_gross_slips(virtual):
+    result, _ = virtual
+    threshold = edge_threshold(result.simulation)
+    events = result.events
+    ratio = events["DG_jump"] / events["DD_jump"]
+    gross = events["kind"] == "gross_slip"
+    assert (ratio[gross] >= threshold).all()
+    moved = ~gross & (events["DG_jump"].abs() >= 0.2 * events.loc[gross, "DG_jump"].abs().median())
+    assert (ratio[moved] < threshold).all()
+
+
+def test_edge_threshold_needs_a_gross_slip(virtual):
+    result, _ = virtual
+    quiet = result.simulation.assign(wave=result.simulation["wave"].where(
+        result.simulation["wave"] != "gross", "partial"))
+    with pytest.raises(SlipwaveError, match="no gross slip"):
+        edge_threshold(quiet)
+
+
+def test_features_classify_by_edges_and_residuals_vanish_on_themselves(virtual):
+    result, csv = virtual
+    events = measured_events(read_acquisition(csv))
+    features = slip_features(events, gross_edge_ratio=edge_threshold(result.simulation),
+                             min_drop=0.3, duration=90.0, sample_rate=100.0)
+    truth = result.events[result.events["visible"]]
+    assert len(features.gross) == (truth["kind"] == "gross_slip").sum()
+    assert features.partial_slips == (truth["kind"] == "partial_slip").sum()
+    assert not np.any(feature_residuals(features, features))
+    fewer = slip_features(events.iloc[:0], gross_edge_ratio=1.0, min_drop=0.3, duration=90.0,
+                          sample_rate=100.0)
+    missing = feature_residuals(fewer, features)
+    assert missing[0] == pytest.approx(0.1 / 0.005)  # a gross slip the simulation lacks
+
+
+def test_intervals_from_curvature_match_a_known_quadratic():
+    rng = np.random.default_rng(0)
+    points = rng.uniform(-1, 1, (80, 2)) * [0.03, 0.006] + [1.0, 0.6]
+    misfit = ((points[:, 0] - 1.0) / 0.01) ** 2 + ((points[:, 1] - 0.6) / 0.002) ** 2 + 20.0
+    history = [(tuple(p), float(m)) for p, m in zip(points, misfit, strict=True)]
+    low, high, method = _intervals(history, (1.0, 0.6), 20.0, 40)
+    assert low[0] < 1.0 < high[0]
+    assert method == "curvature"
+    # chi-square 20 over 38 degrees of freedom: no scaling; sigma 0.01 and 0.002
+    # (the likelihood-ratio region of the evaluations agrees, to their spacing)
+    assert high[0] - 1.0 == pytest.approx(1.96 * 0.01, rel=0.03)
+    assert high[1] - 0.6 == pytest.approx(1.96 * 0.002, rel=0.03)
+
+
+def test_law_of_names_unknown_laws():
+    assert law_of("run-in", {"fs": 0.8, "fd": 0.5, "fs_final": 1.0, "runin_slips": 3}
+                  ).static_after(3) == 1.0
+    with pytest.raises(SlipwaveError, match="unknown friction law 'stribeck'"):
+        law_of("stribeck", {})
+
+
+@pytest.mark.slow
+def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
+    _, csv = virtual
+    recording = read_acquisition(csv)
+    setup = read_test_setup(recording, {"test_id": "v", **CELLS})
+    fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=24,
+                   max_evaluations=12)
+    law = fit["laws"]["coulomb"]["parameters"]
+    for name, truth in TRUTH.items():
+        assert law[name]["value"] == pytest.approx(truth, rel=0.02)
+        assert law[name]["low"] < law[name]["value"] < law[name]["high"]
+    # two gross slips in 90 s: fs is known to a few percent, and its interval says so
+    assert law["fs"]["low"] <= TRUTH["fs"] <= law["fs"]["high"]
+    assert fit["laws"]["coulomb"]["interval_method"] == "secant"
+    table = fits_table([fit])
+    assert table.loc[0, "law"] == "coulomb" and table.loc[0, "height_ratio"] == 0.5
+    assert TestSetup.from_dict(fit["setup"]).to_dict() == fit["setup"]
+
+
+def test_missing_geometry_is_one_error_naming_the_column_and_nothing_is_written(
+        virtual, tmp_path, capsys):
+    _, csv = virtual
+    lines = [line for line in csv.read_text().splitlines(keepends=True)
+             if "height_mm" not in line]
+    bare = tmp_path / "bare.csv"
+    bare.write_text("".join(lines))
+    netcdf, out = tmp_path / "bare.nc", tmp_path / "fit.json"
+    assert main(["ingest", str(bare), "-o", str(netcdf)]) == 0
+    status = main(["fit", str(netcdf), "-o", str(out), "--setting",
+                   *(f"{k}={v}" for k, v in CELLS.items())])
+    assert status == 1
+    error = capsys.readouterr().err
+    assert "add the column height_mm to the campaign table" in error
+    assert not out.exists() and set(tmp_path.iterdir()) == {bare, netcdf}
+
+
+def test_fits_table_reads_every_law(tmp_path):
+    fit = {"test_id": "a", "chosen": "run-in", "parameters": {"fs": 1.0},
+           "setup": {"height_mm": {"value": 20.0}, "length_mm": {"value": 80.0}},
+           "measured": {"gross_slips": 4},
+           "laws": {law: {"delta_aic": d, "parameters": {
+               name: {"value": 1.0, "low": 0.9, "high": 1.1} for name in names}}
+               for (law, names), d in zip({"coulomb": ("fs", "fd"),
+                                           "run-in": ("fs", "fd", "fs_final")}.items(),
+                                          (12.0, 0.0), strict=True)}}
+    table = fits_table([fit])
+    assert table.loc[0, "height_ratio"] == 0.25 and table.loc[0, "coulomb_delta_aic"] == 12.0
+    assert {"fs", "fd_low", "run_in_fs_final_high"} <= set(table.columns)
+    (tmp_path / "f.json").write_text(json.dumps(fit))
+    assert main(["fits", str(tmp_path / "f.json"), "-o", str(tmp_path / "fits.csv")]) == 0
+    assert pd.read_csv(tmp_path / "fits.csv")["law"].tolist() == ["run-in"]

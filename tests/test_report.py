@@ -1,0 +1,174 @@
+"""Reports as a reader sees them: pages in headless Chromium, PDFs rasterised by poppler.
+
+A short virtual test is fitted, simulated and compared, and its report built in full
+and with parts of its inputs missing; the campaign report over it too. Each HTML page
+is loaded in Debian's ``chromium`` (no broken image, nothing wider than the window);
+each PDF is rasterised by ``pdftoppm`` and read by ``pdftotext`` and ``pdfimages`` (its
+pages, its sections and tables, one image per figure). The browser and poppler are
+installed by the repository's CI set-up (``.ci/run``); without them those checks skip,
+saying so.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from slipwave.bench.generate import BenchTest, simulate_test
+from slipwave.bench.replay import replay_test
+from slipwave.bench.setup import read_test_setup
+from slipwave.compare import compare_test
+from slipwave.events import detect_events, events_dataset, segment_phases
+from slipwave.fit import chosen_law, fit_test, fits_table, measured_events
+from slipwave.report import (
+    campaign_summary,
+    pairing_summary,
+    write_campaign_report,
+    write_test_page,
+)
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+POPPLER = shutil.which("pdftoppm")
+needs_chromium = pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not "
+                                    "installed (.ci/run installs it with apt-get)")
+needs_poppler = pytest.mark.skipif(POPPLER is None, reason="poppler-utils (pdftoppm) is not "
+                                   "installed (.ci/run installs it with apt-get)")
+
+CHECK = """<script>
+window.addEventListener("load", () => {
+  const images = [...document.images];
+  const broken = images.filter(i => !(i.complete && i.naturalWidth > 0)).length;
+  const limit = window.innerWidth + 1;
+  const outside = [...document.querySelectorAll("body *")]
+    .filter(e => e.getBoundingClientRect().right > limit && !e.closest(".wide"))
+    .map(e => e.tagName);
+  document.body.setAttribute("data-check", JSON.stringify({
+    images: images.length, broken: broken, outside: outside,
+    page: document.documentElement.scrollWidth, window: window.innerWidth}));
+});
+</script>"""
+
+
+def chromium_check(page: Path, width: int) -> dict:
+    """Load a page in headless Chromium at ``width`` px; what its check script found."""
+    probe = page.with_name(f"probe-{page.name}")
+    probe.write_text(page.read_text().replace("</body>", CHECK + "</body>"))
+    run = subprocess.run(
+        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync", f"--user-data-dir={page.parent / 'chromium-profile'}",
+         f"--window-size={width},900", "--virtual-time-budget=20000", "--dump-dom",
+         probe.as_uri()], capture_output=True, text=True, timeout=180, check=False)
+    found = re.search(r'data-check="([^"]*)"', run.stdout)
+    assert found, f"no check in the page Chromium rendered: {run.stderr[-2000:]}"
+    return json.loads(found.group(1).replace("&quot;", '"'))
+
+
+def pdf_facts(pdf: Path) -> tuple[int, str, int]:
+    """Pages (rasterised by pdftoppm), text, and images of a PDF."""
+    out = pdf.parent / f"{pdf.stem}-page"
+    subprocess.run(["pdftoppm", "-r", "30", "-png", str(pdf), str(out)], check=True,
+                   timeout=120)
+    pages = len(list(pdf.parent.glob(f"{pdf.stem}-page-*.png")))
+    text = subprocess.run(["pdftotext", "-layout", str(pdf), "-"], capture_output=True,
+                          text=True, check=True).stdout
+    listing = subprocess.run(["pdfimages", "-list", str(pdf)], capture_output=True, text=True,
+                             check=True).stdout.splitlines()[2:]
+    return pages, text, len(listing)
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """A short virtual test's report in full, partial reports, and the campaign report."""
+    folder = tmp_path_factory.mktemp("reports")
+    spec = BenchTest("v", elements=24, duration=90.0, video="none", fs=0.9, fd=0.6,
+                     fs_final=None)
+    result = simulate_test(spec, seed=4)
+    recording = result.recording
+    setup = read_test_setup(recording, {"test_id": "v", "youngs_modulus_mpa": "7",
+                                        "poisson_ratio": "0.48", "edge_reference": "frame"})
+    fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=24,
+                   max_evaluations=3)
+    replay = replay_test(setup, chosen_law(fit), elements=24)
+    table = detect_events(recording, gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    events = events_dataset(table, segment_phases(recording, table))
+    comparison = compare_test(table, replay.recording, replay.simulation, min_drop=0.3)
+    simulated_events = comparison.attrs["simulated_events"]
+    pairing = pairing_summary(recording, events, fit, comparison, replay.recording,
+                              simulated_events, replay.contact)
+    pages = {"full": folder / "v.html"}
+    write_test_page(recording, pages["full"], events, None, pairing, pdf=folder / "v.pdf")
+    # partly missing: no simulation at all; a T-only recording
+    pages["measured"] = write_test_page(recording, folder / "measured.html", events,
+                                        pdf=folder / "measured.pdf")
+    force = recording[["T"]].assign_attrs(recording.attrs)
+    pages["force"] = write_test_page(force, folder / "force.html", pdf=folder / "force.pdf")
+    summary = pd.DataFrame([{"test_id": "v", "gross_slip_waves": 2, "partial_slip_waves": 3,
+                             "static_ratio_mean": 0.7, "static_ratio_ci_low": 0.69,
+                             "static_ratio_ci_high": 0.71, "dynamic_ratio_mean": 0.6}])
+    content = campaign_summary(summary, fits_table([fit]), {"v": {
+        "test_id": "v", "verdicts": comparison["verdict"].value_counts().to_dict()}})
+    pages["campaign"] = write_campaign_report(content, folder / "campaign.html",
+                                              pdf=folder / "campaign.pdf")
+    return pages, comparison
+
+
+def test_full_report_says_what_it_compares(built):
+    pages, comparison = built
+    html = pages["full"].read_text()
+    for heading in ("Configuration", "Comparison", "Signals", "First gross slips",
+                    "Space and time", "Friction laws", "Events", "Channels"):
+        assert f"<h2>{heading}</h2>" in html
+    for feature in comparison["feature"]:
+        assert feature.replace("|", "|") in html
+    assert "no video: the simulated zones and kymograph are shown alone" in html
+    assert "measured: least squares of DT on t and T" in html  # sources of the setup
+
+
+def test_partial_reports_say_what_is_missing(built):
+    pages, _ = built
+    measured = pages["measured"].read_text()
+    assert "no simulation: the measurement alone" in measured
+    assert "<h2>Events</h2>" in measured and "<h2>Comparison</h2>" not in measured
+    force = pages["force"].read_text()
+    assert "no simulation" in force and "<h2>Signals</h2>" in force
+
+
+@needs_chromium
+@pytest.mark.parametrize("name", ["full", "measured", "force", "campaign"])
+@pytest.mark.parametrize("width", [1280, 800])
+def test_pages_render_in_chromium_without_broken_images_or_overflow(built, name, width):
+    pages, _ = built
+    found = chromium_check(pages[name], width)
+    assert found["images"] >= 1 and found["broken"] == 0
+    assert found["page"] <= found["window"] and not found["outside"], found
+
+
+@needs_poppler
+@pytest.mark.parametrize(("name", "sections", "least_images"), [
+    ("full", ("Configuration", "Comparison", "Signals", "First gross slips", "Space and time",
+              "Friction laws", "Events", "Channels", "Metadata"), 7),
+    ("measured", ("Signals", "Events", "Channels"), 1),
+    ("force", ("Signals", "Channels"), 1),
+    ("campaign", ("Tests", "T/|N| and fitted friction against H/L"), 1),
+])
+def test_pdfs_have_their_pages_sections_and_figures(built, name, sections, least_images):
+    pages, comparison = built
+    pdf = pages[name].with_suffix(".pdf")
+    count, text, images = pdf_facts(pdf)
+    assert count >= 1 and f"page 1 of {count}" in text
+    for section in sections:
+        assert section in text, section
+    assert images >= least_images
+    if name == "full":
+        assert count >= 4
+        # the comparison table whole: every feature, every verdict
+        flat = " ".join(text.split())
+        for feature in comparison["feature"]:
+            assert " ".join(feature.split()[:3]) in flat, feature

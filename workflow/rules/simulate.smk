@@ -1,0 +1,20 @@
+rule simulate:
+    """One test simulated with its fitted law: a recording in the measurement's shape,
+    the zone history and the simulated kymograph."""
+    input:
+        "results/{test_id}/fit.json",
+    output:
+        recording="results/{test_id}/simulated/recording.nc",
+        contact="results/{test_id}/simulated/contact.nc",
+        steps="results/{test_id}/simulated/steps.nc",
+    log:
+        "results/logs/simulate/{test_id}.log",
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(1500),
+        runtime=15,
+    conda:
+        "../envs/slipwave.yaml"
+    shell:
+        "slipwave simulate --fit {input:q} -o {output.recording:q} "
+        "--contact {output.contact:q} --steps {output.steps:q} > {log:q} 2>&1"
