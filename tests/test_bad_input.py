@@ -159,8 +159,8 @@ def test_7_b_a_video_damaged_in_the_middle_names_the_frames_lost(tmp_path):
         0, 256, 20_000, dtype=np.uint8).tobytes()
     damaged = tmp_path / "damaged.mkv"
     damaged.write_bytes(bytes(data))
-    with pytest.raises(SlipwaveError, match=r"frame 3704 at 153.360 s \(frames lost between "
-                                            r"148.120 s and 153.360 s before it\)"):
+    with pytest.raises(SlipwaveError, match=r"frame 3705 at 153.360 s \(frames lost between "
+                                            r"148.160 s and 153.360 s before it\)"):
         for _ in open_frames(damaged):
             pass
 

@@ -148,7 +148,7 @@ def test_events_dataset_round_trip(hl050, tmp_path):
     assert back.sizes["event"] == len(events)
     assert back["ratio_before"].attrs["units"] == "1"
     assert back["t_start"].attrs["units"] == "s"
-    assert back.attrs["gross_slip"] == 8  # the truth: raw_data/bench/truth
+    assert back.attrs["gross_slip"] == 9  # the truth: raw_data/bench/truth
     assert back["kind"].values.tolist() == events["kind"].tolist()
     xr.testing.assert_equal(back["phase"], dataset["phase"])
 
@@ -159,20 +159,20 @@ def test_command_line_detect_summary_report(tmp_path, capsys):
     events_csv, events_nc = tmp_path / "events.csv", tmp_path / "events.nc"
     assert main(["detect", str(recording), "-o", str(events_csv), "--netcdf",
                  str(events_nc), "--test-id", "hl050"]) == 0
-    assert "30 events (22 partial_slip, 8 gross_slip)" in capsys.readouterr().out
+    assert "32 events (23 partial_slip, 9 gross_slip)" in capsys.readouterr().out
     table = pd.read_csv(events_csv)
-    assert list(table.columns) == list(EVENT_COLUMNS) and len(table) == 30
+    assert list(table.columns) == list(EVENT_COLUMNS) and len(table) == 32
     summary = tmp_path / "summary.csv"
     assert main(["summary", str(events_nc), "-o", str(summary)]) == 0
     row = pd.read_csv(summary).iloc[0]
     assert row["test_id"] == "hl050"
-    assert row["gross_slip_waves"] == 8 and row["partial_slip_waves"] == 22
+    assert row["gross_slip_waves"] == 9 and row["partial_slip_waves"] == 23
     assert row["static_ratio_ci_low"] < row["static_ratio_mean"] < row["static_ratio_ci_high"]
     assert row["normal_loading_s"] == pytest.approx(10.0, abs=0.3)
     page = tmp_path / "page.html"
     assert main(["report", str(recording), "--events", str(events_nc), "-o", str(page)]) == 0
     html = page.read_text()
-    assert "22 partial slip, 8 gross slip" in html and "T/|N| at gross slips" in html
+    assert "23 partial slip, 9 gross slip" in html and "T/|N| at gross slips" in html
 
 
 def test_command_line_detect_on_a_bad_file_fails_cleanly(tmp_path, capsys):

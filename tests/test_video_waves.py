@@ -21,7 +21,6 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from slipwave.campaign import read_campaign
 from slipwave.events import detect_events
 from slipwave.io import read_acquisition
 from slipwave.video import (
@@ -44,14 +43,23 @@ MATCH = 0.1  # s
 
 @pytest.fixture(scope="module")
 def tracked() -> dict[str, tuple[xr.Dataset, pd.DataFrame, pd.DataFrame, dict]]:
-    table = read_campaign(ROOT / "config/tests.tsv")
+    import dataclasses
+
+    import yaml
+
+    from slipwave.bench.generate import load_tests, simulate_test
+    from slipwave.fit import edge_threshold
+
+    specs = {s.test_id: s for s in load_tests(yaml.safe_load((BENCH / "campaign.yaml")
+                                                             .read_text()))}
     out = {}
     for test_id in TESTS:
         source = open_frames(BENCH / f"{test_id}.mkv")
         kymo = kymograph(source, find_geometry(source, 80.0))
         recording = read_acquisition(BENCH / f"{test_id}.csv")
-        ratio = float(table.loc[test_id, "gross_edge_ratio"] or 0.9)
-        events = detect_events(recording, gross_edge_ratio=ratio)
+        # the gross/partial threshold read off the test's simulated slips, as the workflow
+        simulation = simulate_test(dataclasses.replace(specs[test_id], video="none")).simulation
+        events = detect_events(recording, gross_edge_ratio=edge_threshold(simulation))
         spec = json.loads((BENCH / "truth" / f"{test_id}.json").read_text())["test"]
         camera = {**spec["camera"], "loading_time": spec["loading_time"]}
         out[test_id] = (kymo, recording, events, camera)
