@@ -75,7 +75,8 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str]) -> dict[str, Any
     began = time.perf_counter()
     fit = fit_test(setup, events, laws=laws, elements=ELEMENTS)
     fitted = time.perf_counter()
-    replay = replay_test(setup, chosen_law(fit), elements=ELEMENTS, kymograph=False)
+    replay = replay_test(setup, chosen_law(fit), elements=ELEMENTS, kymograph=False,
+                         min_drop=float(events.attrs["min_drop"]))
     simulated = time.perf_counter()
     measured = detect_events(recording,
                              gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])

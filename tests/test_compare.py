@@ -24,7 +24,7 @@ def test_and_replay():
                      fs_final=None)
     result = simulate_test(spec, seed=3)
     setup = read_test_setup(result.recording, CELLS)
-    return result, setup, replay_test(setup, Coulomb(fs=0.9, fd=0.6), elements=24)
+    return result, setup, replay_test(setup, Coulomb(fs=0.9, fd=0.6), min_drop=0.3, elements=24)
 
 
 def test_replay_is_a_recording_with_its_contact_history(test_and_replay):
@@ -47,7 +47,7 @@ def test_replay_is_a_recording_with_its_contact_history(test_and_replay):
 def test_replay_in_the_flat_reference_subtracts_the_travel(test_and_replay):
     _, setup, replay = test_and_replay
     flat = type(setup)(setup.test_id, setup.settings, "flat")
-    again = replay_test(flat, Coulomb(fs=0.9, fd=0.6), elements=24, kymograph=False)
+    again = replay_test(flat, Coulomb(fs=0.9, fd=0.6), min_drop=0.3, elements=24, kymograph=False)
     assert np.allclose(again.recording["DG"] + again.recording["DT"], replay.recording["DG"])
     assert "intensity" not in again.contact
 
@@ -66,7 +66,7 @@ def test_a_test_against_its_own_law_agrees_on_every_compared_feature(test_and_re
 
 def test_a_wrong_law_is_flagged(test_and_replay):
     result, setup, _ = test_and_replay
-    wrong = replay_test(setup, Coulomb(fs=1.3, fd=0.45), elements=24, kymograph=False)
+    wrong = replay_test(setup, Coulomb(fs=1.3, fd=0.45), min_drop=0.3, elements=24, kymograph=False)
     measured = detect_events(result.recording,
                              gross_edge_ratio=wrong.recording.attrs["gross_edge_ratio"])
     table = compare_test(measured, wrong.recording, wrong.simulation, min_drop=0.3)

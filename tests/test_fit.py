@@ -112,6 +112,19 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     assert TestSetup.from_dict(fit["setup"]).to_dict() == fit["setup"]
 
 
+@pytest.mark.parametrize("law", ["run-in", "slip-weakening"])
+def test_a_law_fitted_without_coulomb_starts_from_its_coulomb_limit(virtual, law):
+    _, csv = virtual
+    recording = read_acquisition(csv)
+    setup = read_test_setup(recording, {"test_id": "v", **CELLS})
+    fit = fit_test(setup, measured_events(recording), laws=[law], elements=24,
+                   max_evaluations=2)
+    assert list(fit["laws"]) == [law] and fit["chosen"] == law
+    parameters = fit["laws"][law]["parameters"]
+    assert parameters["fd"]["value"] == pytest.approx(TRUTH["fd"], rel=0.05)
+    assert len(parameters) == (4 if law == "run-in" else 3)
+
+
 def test_missing_geometry_is_one_error_naming_the_column_and_nothing_is_written(
         virtual, tmp_path, capsys):
     _, csv = virtual

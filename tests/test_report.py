@@ -95,7 +95,7 @@ def built(tmp_path_factory):
                                         "poisson_ratio": "0.48", "edge_reference": "frame"})
     fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=24,
                    max_evaluations=3)
-    replay = replay_test(setup, chosen_law(fit), elements=24)
+    replay = replay_test(setup, chosen_law(fit), min_drop=0.3, elements=24)
     table = detect_events(recording, gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
     events = events_dataset(table, segment_phases(recording, table))
     comparison = compare_test(table, replay.recording, replay.simulation, min_drop=0.3)

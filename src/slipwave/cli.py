@@ -355,7 +355,9 @@ def _simulate_test(args: argparse.Namespace) -> None:
     fit = read_fit(str(args.fit))
     setup = TestSetup.from_dict(fit["setup"])
     replay = replay_test(setup, chosen_law(fit), elements=int(fit["elements"]),
-                         sample_rate=args.sample_rate, kymograph=args.contact is not None)
+                         sample_rate=args.sample_rate,
+                         min_drop=float(fit["measured"]["min_drop_n"]),
+                         kymograph=args.contact is not None)
     write_dataset(replay.recording, args.output)
     if args.contact is not None:
         write_dataset(replay.contact, args.contact)

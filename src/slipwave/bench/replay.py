@@ -22,7 +22,7 @@ from slipwave.bench.sensors import clean_signals, step_times
 from slipwave.bench.setup import TestSetup
 from slipwave.cache import DiskCache
 from slipwave.defaults import BAND_MM, CONVENTIONS
-from slipwave.fit import WAVE_SPEED_MM_S, edge_threshold
+from slipwave.fit import WAVE_SPEED_MM_S, detected_edge_threshold
 from slipwave.solver import Coulomb, Slab, condense, simulate
 
 STATE_NAMES = "open stick slip"
@@ -50,7 +50,7 @@ class Replay:
     contact: xr.Dataset
 
 
-def replay_test(setup: TestSetup, friction: Coulomb, *, elements: int = 80,
+def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, elements: int = 80,
                 sample_rate: float = 100.0, kymograph: bool = True) -> Replay:
     """Simulate a test with a friction law and shape it like the measurement.
 
@@ -60,6 +60,9 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, elements: int = 80,
         The test's configuration.
     friction
         The law (usually the fit's chosen one).
+    min_drop
+        The measurement's smallest drop, N (``fit.json``'s ``measured.min_drop_n``): the
+        simulated slips are read as detection reads the measured ones.
     elements
         Elements along the contact (the fit's).
     sample_rate
@@ -72,7 +75,7 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, elements: int = 80,
     Replay
         The simulation, its recording and its contact history. The recording's attrs
         hold ``gross_edge_ratio``, the test's gross/partial edge threshold read off the
-        simulated slips (:func:`slipwave.fit.edge_threshold`).
+        simulated slips (:func:`slipwave.fit.detected_edge_threshold`).
 
     """
     spec = setup.bench_test(friction, elements=elements)
@@ -89,7 +92,8 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, elements: int = 80,
     recording.attrs.update({
         "test_id": setup.test_id, "source": f"simulation of {setup.test_id}",
         "sample_rate_hz": sample_rate, "edge_reference": setup.edge_reference,
-        "gross_edge_ratio": edge_threshold(simulation, edge_reference=setup.edge_reference),
+        "gross_edge_ratio": detected_edge_threshold(simulation, setup, min_drop=min_drop,
+                                                    sample_rate=sample_rate),
         "friction_law": simulation.attrs.get("friction_law", type(friction).__name__),
         "Conventions": CONVENTIONS,
         **{key: setting.value for key, setting in setup.settings.items()}})
