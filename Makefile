@@ -39,8 +39,12 @@ lint: $(STAMP)
 	$(BIN)/numpydoc lint $$(find src/slipwave -name '*.py')
 	$(BIN)/mypy
 
+# Two pytest workers (pytest-xdist), a test file to each: a file's module fixtures (the
+# default campaign simulated, the Colas records denoised) are built once. One BLAS
+# thread per worker: two workers with two threads each on two cores run slower than one.
 test: lint
-	$(BIN)/python -m pytest
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+		$(BIN)/python -m pytest -n 2 --dist loadfile
 
 # The unit tests and doctests alone (no whole virtual-bench test, no workflow run).
 test-fast: $(STAMP)
