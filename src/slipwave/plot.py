@@ -7,11 +7,13 @@ importing this module selects no backend and drawing needs no display.
 from __future__ import annotations
 
 import io
+from collections.abc import Iterable
 
 import numpy as np
 import pandas as pd
 import seaborn as sns
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
@@ -35,6 +37,23 @@ def _phase_runs(phase: xr.DataArray) -> list[tuple[str, float, float]]:
     ends = np.concatenate([change, [codes.size]]) - 1
     return [(PHASES[codes[a]], float(time[a]), float(time[b]))
             for a, b in zip(starts, ends, strict=True) if PHASES[codes[a]] != "stick"]
+
+
+def _mark_events(axes: Iterable[Axes], t_axis: Axes | None, events: xr.Dataset, *,
+                 alpha: float, suffix: str = "") -> set[str]:
+    """Shade the phases on every axis and mark each slip's onset on T's; the phases shown."""
+    runs = _phase_runs(events["phase"])
+    for ax in axes:
+        for label, start, end in runs:
+            ax.axvspan(start, end, color=PHASE_COLOURS[label], alpha=alpha, lw=0)
+    if t_axis is not None:
+        kinds = events["kind"].values.astype(str)
+        for kind, (marker, colour) in KIND_MARKERS.items():
+            chosen = kinds == kind
+            if chosen.any():
+                t_axis.plot(events["t_start"].values[chosen], events["T_before"].values[chosen],
+                            marker, color=colour, ms=4, label=kind.replace("_", " ") + suffix)
+    return {label for label, _, _ in runs}
 
 
 def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> Figure:
@@ -77,19 +96,9 @@ def plot_recording(recording: xr.Dataset, events: xr.Dataset | None = None) -> F
         axes[-1].set_title(ratio.attrs["long_name"], fontsize=9, loc="left")
     axes[-1].set_xlabel("time [s]")
     if events is not None:
-        runs = _phase_runs(events["phase"])
-        for ax in axes:
-            for label, start, end in runs:
-                ax.axvspan(start, end, color=PHASE_COLOURS[label], alpha=0.35, lw=0)
+        shown = _mark_events(axes, axes[panels.index("T")] if "T" in panels else None, events,
+                             alpha=0.35)
         if "T" in panels:
-            kinds = events["kind"].values.astype(str)
-            for kind, (marker, colour) in KIND_MARKERS.items():
-                chosen = kinds == kind
-                if chosen.any():
-                    axes[panels.index("T")].plot(
-                        events["t_start"].values[chosen], events["T_before"].values[chosen],
-                        marker, color=colour, ms=4, label=kind.replace("_", " "))
-            shown = {label for label, _, _ in runs}
             handles = [Patch(color=PHASE_COLOURS[k], alpha=0.35, label=k.replace("_", " "))
                        for k in PHASE_COLOURS if k in shown]
             axes[panels.index("T")].legend(
@@ -518,18 +527,8 @@ def plot_pairing(recording: xr.Dataset, simulated: xr.Dataset, events: xr.Datase
         unit = measured.attrs.get("units", "1") if name != "T/|N|" else "-"
         ax.set_ylabel(f"{name} [{unit}]")
     if events is not None:
-        runs = _phase_runs(events["phase"])
-        for ax in axes:
-            for label, start, end in runs:
-                ax.axvspan(start, end, color=PHASE_COLOURS[label], alpha=0.3, lw=0)
-        if "T" in panels:
-            kinds = events["kind"].values.astype(str)
-            for kind, (marker, colour) in KIND_MARKERS.items():
-                chosen = kinds == kind
-                if chosen.any():
-                    axes[0].plot(events["t_start"].values[chosen],
-                                 events["T_before"].values[chosen], marker, color=colour, ms=4,
-                                 label=f"{kind.replace('_', ' ')} (measured)")
+        _mark_events(axes, axes[0] if "T" in panels else None, events, alpha=0.3,
+                     suffix=" (measured)")
     if simulated_events is not None and len(simulated_events) and "T" in panels:
         for kind, (marker, colour) in KIND_MARKERS.items():
             chosen = simulated_events[simulated_events["kind"] == kind]
