@@ -103,7 +103,9 @@ def built(tmp_path_factory):
     pairing = pairing_summary(recording, events, fit, comparison, replay.recording,
                               simulated_events, replay.contact)
     pages = {"full": folder / "v.html"}
-    write_test_page(recording, pages["full"], events, None, pairing, pdf=folder / "v.pdf")
+    write_test_page(recording, pages["full"], events, None, pairing, pdf=folder / "v.pdf",
+                    workers=2)
+    pages["serial"] = write_test_page(recording, folder / "serial.html", events, None, pairing)
     # partly missing: no simulation at all; a T-only recording
     pages["measured"] = write_test_page(recording, folder / "measured.html", events,
                                         pdf=folder / "measured.pdf")
@@ -129,6 +131,13 @@ def test_full_report_says_what_it_compares(built):
         assert feature.replace("|", "|") in html
     assert "no video: the simulated zones and kymograph are shown alone" in html
     assert "measured: least squares of DT on t and T" in html  # sources of the setup
+
+
+def test_figures_drawn_on_two_processes_are_those_drawn_on_one(built):
+    pages, _ = built
+    full = pages["full"].read_text()
+    assert full == pages["serial"].read_text()
+    assert full.count("data:image/png;base64,") >= 5
 
 
 def test_partial_reports_say_what_is_missing(built):

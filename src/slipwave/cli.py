@@ -281,7 +281,8 @@ def _report(args: argparse.Namespace) -> None:
                               else pd.read_csv(args.simulated_events)),
             contact=None if args.contact is None else read_dataset(args.contact),
             placement=compared.get("map"), behaviour_map=behaviour_map, kymo=kymo, clock=clock)
-    write_test_page(recording, args.output, events, video, pairing, pdf=args.pdf)
+    write_test_page(recording, args.output, events, video, pairing, pdf=args.pdf,
+                    workers=args.threads)
     print(f"{args.recording} -> {args.output}" + (f", {args.pdf}" if args.pdf else ""))
 
 
@@ -535,6 +536,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="simulated contact history of 'slipwave simulate --contact'")
     report.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
     report.add_argument("--pdf", type=Path, default=None, help="also print the page to PDF")
+    report.add_argument("--threads", type=int, default=1,
+                        help="processes to draw the figures on (default 1)")
     report.set_defaults(run=_report)
 
     campaign_report = commands.add_parser(

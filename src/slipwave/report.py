@@ -11,6 +11,7 @@ import jinja2
 import numpy as np
 import pandas as pd
 import xarray as xr
+from matplotlib.figure import Figure
 
 from slipwave import __version__
 from slipwave.errors import warning_lines
@@ -18,6 +19,7 @@ from slipwave.events import EVENT_COLUMNS, events_table, wave_counts
 from slipwave.io import CHANNELS, atomic_output
 from slipwave.plot import (
     figure_png,
+    figures_png,
     plot_frames,
     plot_gross_ratios,
     plot_gross_zooms,
@@ -158,11 +160,12 @@ def video_summary(
     Returns
     -------
     dict
-        Figures (base64 PNG), frames, wave counts and directions, median
-        front speed, the clock, the first gross slip's time and the pairing.
+        Figures (matplotlib, drawn by :func:`render_test_page`), frames, wave
+        counts and directions, median front speed, the clock, the first gross
+        slip's time and the pairing.
 
     """
-    figures = [figure_png(plot_kymograph(kymo, waves))]
+    figures = [plot_kymograph(kymo, waves)]
     gross = None
     if events is not None:
         kinds = events["kind"].values.astype(str)
@@ -171,11 +174,11 @@ def video_summary(
     strip = None
     if gross is not None:
         start = float(clock.camera_time(gross))
-        figures.append(figure_png(plot_kymograph(kymo, waves, window=(start - 1.0, start + 1.5))))
+        figures.append(plot_kymograph(kymo, waves, window=(start - 1.0, start + 1.5)))
         if frames is not None:
             images, times = _frames_at(frames, start + np.arange(-1, 7) * 0.08)
             if images:
-                strip = base64.b64encode(figure_png(plot_frames(images, times))).decode("ascii")
+                strip = plot_frames(images, times)
     resolved = waves[waves["kind"] != "unresolved"]
     pairing = None
     if fused is not None:
@@ -185,7 +188,7 @@ def video_summary(
                    "video": int(source.get("video", 0)), "judged": int(agrees.size),
                    "agree": int(agrees.sum())}
     return {
-        "figures": [base64.b64encode(png).decode("ascii") for png in figures],
+        "figures": figures,
         "frames": strip,
         "waves": len(resolved),
         "unresolved": len(waves) - len(resolved),
@@ -207,7 +210,7 @@ def _number(value: Any) -> Any:
     return value
 
 
-def _png(fig: Any) -> str:
+def _png(fig: Figure) -> str:
     return base64.b64encode(figure_png(fig)).decode("ascii")
 
 
@@ -251,7 +254,8 @@ def pairing_summary(
     -------
     dict
         ``setup`` (rows with sources), ``laws`` (rows), ``chosen``, ``comparison``
-        (rows) and ``verdicts``, figures (base64 PNG: ``signals``, ``zooms``,
+        (rows) and ``verdicts``, figures (matplotlib, drawn by
+        :func:`render_test_page`: ``signals``, ``zooms``,
         ``ratios``, ``space_time``, ``frames``, ``map``), ``placement`` and ``missing``
         (what could not be shown, in words).
 
@@ -296,43 +300,65 @@ def pairing_summary(
     if simulated is None:
         missing.append("no simulation: measured signals only")
     else:
-        figures["signals"] = _png(plot_pairing(recording, simulated, events, simulated_events))
+        figures["signals"] = plot_pairing(recording, simulated, events, simulated_events)
         if events is not None:
             zooms = plot_gross_zooms(recording, simulated, events, simulated_events)
             if zooms is None:
                 missing.append("no measured gross slip to zoom on")
             else:
-                figures["zooms"] = _png(zooms)
-            figures["ratios"] = _png(plot_gross_ratios(events_table(events), simulated_events))
+                figures["zooms"] = zooms
+            figures["ratios"] = plot_gross_ratios(events_table(events), simulated_events)
     if contact is None and kymo is None:
         missing.append("no video and no simulated contact: no space-time diagram")
     else:
         timing = (clock.offset, clock.rate) if clock is not None else (0.0, 1.0)
-        figures["space_time"] = _png(plot_space_time(contact, kymo, timing))
+        figures["space_time"] = plot_space_time(contact, kymo, timing)
         if kymo is None:
             missing.append("no video: the simulated zones and kymograph are shown alone")
         if contact is None:
             missing.append("no simulated contact history: the video's kymograph alone")
     if contact is not None and "frame" in contact:
-        figures["frames"] = _png(plot_frames(
+        figures["frames"] = plot_frames(
             list(contact["frame"].values), [float(t) for t in contact["frame_time"].values],
-            [str(label) for label in contact["frame_label"].values]))
+            [str(label) for label in contact["frame_label"].values])
         summary["frame_labels"] = [str(label) for label in contact["frame_label"].values]
     if behaviour_map is not None and placement is not None and fit is not None:
         fs = fit["laws"][fit["chosen"]]["parameters"]["fs"]
         tests = pd.DataFrame([{"test_id": fit["test_id"], "height_ratio":
                                placement["height_ratio"], "ratio": fs["value"],
                                "ci_low": fs["low"], "ci_high": fs["high"]}])
-        figures["map"] = _png(plot_map(behaviour_map, tests,
-                                       label="this test (fitted fs, 95 % interval)"))
+        figures["map"] = plot_map(behaviour_map, tests,
+                                  label="this test (fitted fs, 95 % interval)")
     elif fit is not None:
         missing.append("no behaviour map: the test is not placed on it")
     return summary
 
 
+def _drawn(video: dict[str, Any] | None, pairing: dict[str, Any] | None,
+           main: Figure | None, workers: int
+           ) -> tuple[str | None, dict[str, Any] | None, dict[str, Any] | None]:
+    """The page's figures as base64 PNG, drawn together (the summaries left as they were)."""
+    holder: dict[str, Any] = {"main": main}
+    slots: list[tuple[dict[str, Any] | list[Any], Any]] = [(holder, "main")]
+    if video is not None:
+        video = {**video, "figures": list(video["figures"])}
+        slots += [(video["figures"], i) for i in range(len(video["figures"]))]
+        slots.append((video, "frames"))
+    if pairing is not None:
+        pairing = {**pairing, "figures": dict(pairing["figures"])}
+        slots += [(pairing["figures"], key) for key in pairing["figures"]]
+    slots = [(h, k) for h, k in slots if isinstance(h[k], Figure)]
+    # largest first, so that the last figure a worker takes is a small one
+    slots.sort(key=lambda slot: -float(np.prod(slot[0][slot[1]].get_size_inches())))
+    pngs = figures_png([h[k] for h, k in slots], workers=workers)
+    for (h, k), png in zip(slots, pngs, strict=True):
+        h[k] = base64.b64encode(png).decode("ascii")
+    return holder["main"], video, pairing
+
+
 def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
                      video: dict[str, Any] | None = None,
-                     pairing: dict[str, Any] | None = None) -> str:
+                     pairing: dict[str, Any] | None = None, *, workers: int = 1) -> str:
     """The HTML page of one test: metadata, warnings, channels and their plot.
 
     With ``events`` (:func:`slipwave.events.events_dataset`) the plot shades
@@ -352,6 +378,8 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         From :func:`video_summary`, or ``None``.
     pairing
         From :func:`pairing_summary`, or ``None`` (the measurement alone).
+    workers
+        Processes to draw the figures on (:func:`slipwave.plot.figures_png`).
 
     Returns
     -------
@@ -359,7 +387,10 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         The page's HTML.
 
     """
-    png = figure_png(plot_recording(recording, events))
+    # the measurement alone is drawn only where no figure pairs it with its simulation
+    paired = pairing is not None and pairing["figures"].get("signals") is not None
+    main = None if paired else plot_recording(recording, events)
+    figure, video, pairing = _drawn(video, pairing, main, workers)
     attrs = recording.attrs
     time = recording["time"].values
     metadata = {
@@ -376,7 +407,7 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         channels=channel_summary(recording),
         samples=int(time.size),
         duration=float(time[-1] - time[0]) if time.size else 0.0,
-        figure=base64.b64encode(png).decode("ascii"),
+        figure=figure,
         events=None if events is None else event_summary(events),
         video=video,
         pairing=pairing,
@@ -416,7 +447,7 @@ def write_pdf(html: str, path: str | PathLike[str]) -> Path:
 def write_test_page(
     recording: xr.Dataset, path: str | PathLike[str], events: xr.Dataset | None = None,
     video: dict[str, Any] | None = None, pairing: dict[str, Any] | None = None, *,
-    pdf: str | PathLike[str] | None = None,
+    pdf: str | PathLike[str] | None = None, workers: int = 1,
 ) -> Path:
     """Write :func:`render_test_page` to ``path`` (and ``pdf``), whole or not at all.
 
@@ -428,6 +459,8 @@ def write_test_page(
         The HTML file to write.
     pdf
         Also print it to this PDF; ``None``: no PDF.
+    workers
+        Processes to draw the figures on.
 
     Returns
     -------
@@ -435,7 +468,7 @@ def write_test_page(
         The page written.
 
     """
-    html = render_test_page(recording, events, video, pairing)
+    html = render_test_page(recording, events, video, pairing, workers=workers)
     if pdf is not None:
         write_pdf(html, pdf)
     with atomic_output(path) as temporary:

@@ -21,7 +21,8 @@ rule report:
     params:
         video=video_options,
         pairing=pairing_options,
-    threads: 1
+    # the figures are drawn on the job's cores (most of a report's time)
+    threads: 2
     resources:
         mem_mb=scaled_memory(3000),
         runtime=15,
@@ -29,7 +30,8 @@ rule report:
         "../envs/slipwave.yaml"
     shell:
         "slipwave report {input.recording:q} --events {input.events:q} {params.video} "
-        "{params.pairing} -o {output.html:q} --pdf {output.pdf:q} > {log:q} 2>&1"
+        "{params.pairing} -o {output.html:q} --pdf {output.pdf:q} --threads {threads} "
+        "> {log:q} 2>&1"
 
 
 rule campaign_report:
