@@ -4,6 +4,9 @@ Times ``slipwave report`` (HTML and PDF, every section: signals, zooms, space-ti
 frames, laws, map, video) on each test of the default campaign, and
 ``slipwave report-campaign``, from the workflow's results (``make run`` first).
 
+The figures are drawn on 2 processes, as the workflow's rule does
+(``REPORT_THREADS=1`` to time one).
+
 Run: make bench  (or python benchmarks/bench_report.py)
 """
 
@@ -50,7 +53,7 @@ def main() -> None:
                        "--simulated-events", f"{r}/simulated/events.csv",
                        "--contact", f"{r}/simulated/contact.nc", "--map",
                        "results/map/map.nc", "-o", str(out / f"{t}.html"),
-                       "--pdf", str(out / f"{t}.pdf"), "--threads", "2"]
+                       "--pdf", str(out / f"{t}.pdf"), "--threads", os.environ.get("REPORT_THREADS", "2")]
             if test["frames"]:
                 command += ["--kymograph", f"{r}/kymograph.nc", "--waves", f"{r}/waves.csv",
                             "--fused", f"{r}/events_video.csv", "--clock", f"{r}/clock.json",
