@@ -72,6 +72,22 @@ def test_features_classify_by_edges_and_residuals_vanish_on_themselves(virtual):
     assert missing[0] == pytest.approx(0.1 / 0.005)  # a gross slip the simulation lacks
 
 
+def test_first_slip_load_rises_steadily_with_fs(tmp_path):
+    """The feature that carries fs: T/|N| before the first visible slip (80 elements)."""
+    firsts = []
+    for fs in (0.8, 0.85, 0.9):
+        spec = BenchTest("w", elements=80, duration=90.0, video="none", fs=fs, fd=0.6,
+                         fs_final=None)
+        recording = read_acquisition(write_test(simulate_test(spec, seed=5),
+                                                tmp_path / str(fs))["csv"])
+        features = slip_features(measured_events(recording), gross_edge_ratio=1.0,
+                                 min_drop=0.3, duration=90.0, sample_rate=100.0)
+        assert 0.3 < features.first_ratio < fs and features.first_time > 0
+        firsts.append(features.first_ratio)
+    slopes = np.diff(firsts) / 0.05
+    assert np.all((slopes > 0.9) & (slopes < 1.6))  # at gross slips: up and down with fs
+
+
 def test_intervals_from_curvature_match_a_known_quadratic():
     rng = np.random.default_rng(0)
     points = rng.uniform(-1, 1, (80, 2)) * [0.03, 0.006] + [1.0, 0.6]

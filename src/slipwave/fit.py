@@ -88,6 +88,12 @@ class SlipFeatures:
         The recording's length, s.
     sample_rate
         The card's sampling rate, Hz.
+    first_time, first_ratio
+        Start and T/|N| before the first slip of any kind (NaN: no slip). It comes
+        before any visible slip has redistributed the load, so its T/|N| rises
+        steadily with fs (by about 1.2 per unit of fs on 80 elements), and it is what
+        carries fs most directly: at gross slips T/|N| rises and falls with fs as the
+        partial slips before them change.
 
     """
 
@@ -96,6 +102,8 @@ class SlipFeatures:
     min_drop: float
     duration: float
     sample_rate: float
+    first_time: float = float("nan")
+    first_ratio: float = float("nan")
 
 
 _GROSS_COLUMNS = ("t_start", "ratio_before", "ratio_after", "drop")
@@ -287,8 +295,11 @@ def slip_features(events: pd.DataFrame, *, gross_edge_ratio: float, min_drop: fl
     significant = np.abs(events["DG_jump"].to_numpy(dtype=float)) >= events.attrs.get(
         "DG_min_jump", 0.0)
     gross = significant & (events["edge_ratio"].to_numpy(dtype=float) >= gross_edge_ratio)
+    first = int(np.argmin(events["t_start"].to_numpy(dtype=float)))
     return SlipFeatures(events.loc[gross, list(_GROSS_COLUMNS)].reset_index(drop=True),
-                        int((~gross).sum()), min_drop, duration, sample_rate)
+                        int((~gross).sum()), min_drop, duration, sample_rate,
+                        float(events["t_start"].iloc[first]),
+                        float(events["ratio_before"].iloc[first]))
 
 
 def measured_events(recording: xr.Dataset, *, edge_convention: str = "auto") -> pd.DataFrame:
@@ -374,7 +385,8 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     (:data:`RATIO_SIGMA`) and their times (:data:`TIME_SIGMA_S`), paired in order; a
     gross slip the simulation lacks counts as T/|N| 0.1 away and its time as the
     recording's end. Then the numbers of gross slips (one slip) and of partial slips
-    (:data:`PARTIAL_SIGMA`).
+    (:data:`PARTIAL_SIGMA`), and, where the measurement has a slip, T/|N| before the
+    first slip of any kind and its time (missing: as a missing gross slip).
 
     With ``calibration_error``, the load cells' calibration is a nuisance: every
     simulated T/|N| is scaled by (1 + c), c of standard deviation
@@ -402,31 +414,48 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     >>> one = SlipFeatures(gross, 2, 0.3, 60.0, 100.0)
     >>> feature_residuals(one, one).tolist()
     [0.0, 0.0, 0.0, 0.0, 0.0]
+    >>> first = SlipFeatures(gross, 2, 0.3, 60.0, 100.0, first_time=4.0, first_ratio=0.5)
+    >>> later = SlipFeatures(gross, 2, 0.3, 60.0, 100.0, first_time=5.0, first_ratio=0.52)
+    >>> feature_residuals(later, first).round(3).tolist()  # T/|N| 0.02 and 1 s later
+    [0.0, 0.0, 4.0, 0.0, 1.0, 0.0, 0.0]
     """
     m = measured.gross.iloc[:MAX_GROSS]
     s = simulated.gross
     k = len(m)
-    ratios = np.zeros(2 * k)  # simulated T/|N| of the paired slips (0 where unpaired)
-    offsets = np.full(2 * k, 0.1)  # simulated - measured; a missing slip: 0.1
     shared = min(k, len(s))
-    for j, column in enumerate(("ratio_before", "ratio_after")):
-        ratios[j * k:j * k + shared] = s[column].to_numpy()[:shared]
-        offsets[j * k:j * k + shared] = (s[column].to_numpy()[:shared]
-                                         - m[column].to_numpy()[:shared])
-    t = np.empty(k)
-    t[:shared] = s["t_start"].to_numpy()[:shared] - m["t_start"].to_numpy()[:shared]
-    t[shared:] = measured.duration - m["t_start"].to_numpy()[shared:]
+    simulated_ratios = [s[column].to_numpy()[:shared] for column in ("ratio_before",
+                                                                    "ratio_after")]
+    measured_ratios = [m[column].to_numpy() for column in ("ratio_before", "ratio_after")]
+    simulated_times = [s["t_start"].to_numpy()[:shared]]
+    measured_times = [m["t_start"].to_numpy()]
+    if np.isfinite(measured.first_ratio):
+        found = np.isfinite(simulated.first_ratio)
+        simulated_ratios.append(np.array([simulated.first_ratio] if found else []))
+        measured_ratios.append(np.array([measured.first_ratio]))
+        simulated_times.append(np.array([simulated.first_time] if found else []))
+        measured_times.append(np.array([measured.first_time]))
+    ratios, offsets, t = [], [], []
+    for simulated_ratio, measured_ratio in zip(simulated_ratios, measured_ratios, strict=True):
+        n = simulated_ratio.size
+        # simulated T/|N| (0 where unpaired) and simulated - measured (a missing slip: 0.1)
+        ratios.append(np.pad(simulated_ratio, (0, measured_ratio.size - n)))
+        offsets.append(np.concatenate([simulated_ratio - measured_ratio[:n],
+                                       np.full(measured_ratio.size - n, 0.1)]))
+    for simulated_time, measured_time in zip(simulated_times, measured_times, strict=True):
+        n = simulated_time.size
+        t.append(np.concatenate([simulated_time - measured_time[:n],
+                                 measured.duration - measured_time[n:]]))
     counts = [len(s) - len(measured.gross),
               (simulated.partial_slips - measured.partial_slips)
               / max(3.0, PARTIAL_SIGMA * measured.partial_slips)]
-    a, d = ratios / RATIO_SIGMA, offsets / RATIO_SIGMA
+    a, d = np.concatenate(ratios) / RATIO_SIGMA, np.concatenate(offsets) / RATIO_SIGMA
     prior: list[float] = []
     if calibration_error > 0:
         spread = np.sqrt(2.0) * calibration_error
         c = -float(a @ d) / (float(a @ a) + spread**-2)
         d = d + c * a
         prior = [c / spread]
-    return np.concatenate([d, t / TIME_SIGMA_S, counts, prior])
+    return np.concatenate([d, np.concatenate(t) / TIME_SIGMA_S, counts, prior])
 
 
 def law_of(name: str, params: Mapping[str, float]) -> Coulomb:
@@ -716,7 +745,8 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
             jacobian.append(None)
     history = [(point, value) for point, value in objective.history if np.isfinite(value)]
     theta, misfit = min(history, key=lambda item: item[1])
-    features = 3 * min(len(objective.measured.gross), MAX_GROSS) + 2
+    features = (3 * min(len(objective.measured.gross), MAX_GROSS) + 2
+                + 2 * int(np.isfinite(objective.measured.first_ratio)))
     low, high, method = _intervals(history, theta, misfit, features)
     if all(column is not None for column in jacobian):
         matrix = np.column_stack(jacobian)
