@@ -30,8 +30,8 @@ TRUTH = {"fs": 0.9, "fd": 0.6}
 
 @pytest.fixture(scope="module")
 def virtual(tmp_path_factory):
-    """A short Coulomb test on a coarse mesh: its files and its truth."""
-    spec = BenchTest("v", elements=24, duration=90.0, video="none", fs_final=None, **TRUTH)
+    """A short Coulomb test on the fit's mesh (80 elements): its files and its truth."""
+    spec = BenchTest("v", elements=80, duration=90.0, video="none", fs_final=None, **TRUTH)
     result = simulate_test(spec, seed=5)
     folder = tmp_path_factory.mktemp("virtual")
     paths = write_test(result, folder)
@@ -114,7 +114,7 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     _, csv = virtual
     recording = read_acquisition(csv)
     setup = read_test_setup(recording, {"test_id": "v", **CELLS})
-    fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=24,
+    fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=80,
                    max_evaluations=12)
     law = fit["laws"]["coulomb"]["parameters"]
     for name, truth in TRUTH.items():
@@ -133,7 +133,7 @@ def test_a_law_fitted_without_coulomb_starts_from_its_coulomb_limit(virtual, law
     _, csv = virtual
     recording = read_acquisition(csv)
     setup = read_test_setup(recording, {"test_id": "v", **CELLS})
-    fit = fit_test(setup, measured_events(recording), laws=[law], elements=24,
+    fit = fit_test(setup, measured_events(recording), laws=[law], elements=80,
                    max_evaluations=2)
     assert list(fit["laws"]) == [law] and fit["chosen"] == law
     parameters = fit["laws"][law]["parameters"]

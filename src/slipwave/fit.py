@@ -627,6 +627,20 @@ def _closest(scan: Mapping[tuple[float, ...], SlipFeatures], target: float,
     return best
 
 
+def _first_slip_fs(runs: Mapping[tuple[float, ...], SlipFeatures], target: float) -> float:
+    """The fs whose T/|N| before the first slip is ``target``, between Coulomb runs.
+
+    Interpolated between the runs (fs first in their parameters) ordered by that
+    T/|N|, which rises steadily with fs; NaN with fewer than two runs or no target.
+    """
+    points = sorted((features.first_ratio, theta[0]) for theta, features in runs.items()
+                    if np.isfinite(features.first_ratio))
+    if len(points) < 2 or not np.isfinite(target):
+        return float("nan")
+    ratios, fs = np.asarray(points).T
+    return float(np.interp(target, ratios, fs))
+
+
 def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
             previous: Mapping[str, LawFit], scan: Mapping[tuple[float, ...], SlipFeatures]
             ) -> Sequence[tuple[float, ...]]:
@@ -634,15 +648,17 @@ def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
 
     Coulomb: a scan of fs at the measured T/|N| after the largest drops (T/|N| at
     gross slips is not monotonic in fs, since the partial slips before it change with
-    fs: a scan finds the right valley, a gradient does not). Run-in: fs_final from the
-    scanned Coulomb run whose gross slips match the measured later ones, the number of
-    slips until the measured T/|N| settles, and a scan of fs below fs_final.
-    Slip-weakening: around Coulomb's optimum with a few Dc. A law fitted without
-    Coulomb before it starts from the same scan of fs, as its Coulomb limit (no run-in,
-    Dc 0.03 mm).
+    fs: a scan finds the right valley, a gradient does not); :func:`fit_law` then adds
+    the fs the first slip gives. Run-in: fs from the first slip (before any gross
+    slip, the run-in has not begun) read off the Coulomb runs, fs_final from the
+    scanned Coulomb run whose gross slips match the measured later ones, and around
+    the number of slips until the measured T/|N| settles (without a first slip, a scan
+    of fs below fs_final). Slip-weakening: around Coulomb's optimum with a few Dc. A law
+    fitted without Coulomb before it starts from the same scan of fs, as its Coulomb
+    limit (no run-in, Dc 0.03 mm).
     """
     fd = _fd_start(measured)
-    scanned = [fd + excess for excess in np.arange(0.05, 0.81, 0.05)]
+    scanned = [fd + excess for excess in np.arange(0.05, 0.81, 0.1)]
     coulomb = previous.get("coulomb")
     if law == "coulomb":
         return [(fs, fd) for fs in scanned]
@@ -662,6 +678,11 @@ def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
         final = fs if not np.isfinite(final) else final
         settled = np.abs(ratios - np.median(ratios[later])) <= 0.01
         runin = float(np.clip(np.argmax(settled), 1, 8))
+        first = _first_slip_fs(scan, objective.measured.first_ratio)
+        if np.isfinite(first):
+            return [(first, fd, float(max(final, first)), float(slips))
+                    for slips in {max(1.0, runin - 1.0), runin, runin + 1.0}] + [
+                (fs, fd, fs, 1.0)]
         firsts = np.arange(fd + 0.05, max(final, fd + 0.06), 0.05)
         return [(float(first), fd, float(max(final, first)), runin) for first in firsts] + [
             (fs, fd, fs, 1.0)]
@@ -715,6 +736,11 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     objective = _Objective(setup, measured, law, elements, threshold, calibration_error)
     starts = _starts(law, objective, measured, previous or {}, scan or {})
     best = min(starts, key=objective)
+    if law == "coulomb":
+        # the scan's runs give fs by the first slip's T/|N|, finer than the scan's step
+        first = _first_slip_fs(objective.features, objective.measured.first_ratio)
+        if np.isfinite(first):
+            best = min([best, objective.clip((first, best[1]))], key=objective)
     scale = np.array([_SIMPLEX[name] for name in LAWS[law]])
     simplex = np.vstack([best, best + np.diag(scale)])
     minimize(objective, np.asarray(best), method="Nelder-Mead",
