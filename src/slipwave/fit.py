@@ -28,6 +28,7 @@ import json
 import time as clock
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -630,15 +631,30 @@ def _closest(scan: Mapping[tuple[float, ...], SlipFeatures], target: float,
 def _first_slip_fs(runs: Mapping[tuple[float, ...], SlipFeatures], target: float) -> float:
     """The fs whose T/|N| before the first slip is ``target``, between Coulomb runs.
 
-    Interpolated between the runs (fs first in their parameters) ordered by that
-    T/|N|, which rises steadily with fs; NaN with fewer than two runs or no target.
+    Interpolated between two runs next to each other in fs (fs first in their
+    parameters) whose T/|N| rises across the target: it rises steadily with fs, but
+    only where fs is well above fd (closer, the first cascades stay too small to be
+    seen and the first visible slip is a later one). With several such pairs, the one
+    of highest fs; NaN with none.
+
+    Examples
+    --------
+    >>> def run(fs, first):
+    ...     return (fs, 0.6), SlipFeatures(pd.DataFrame(), 0, 0.3, 90.0, 100.0,
+    ...                                    first_time=50.0, first_ratio=first)
+    >>> runs = dict([run(0.62, 0.56), run(0.72, 0.52), run(0.82, 0.51), run(0.92, 0.63)])
+    >>> round(_first_slip_fs(runs, 0.58), 4)  # not between 0.62 and 0.72, where it falls
+    0.8783
     """
-    points = sorted((features.first_ratio, theta[0]) for theta, features in runs.items()
+    points = sorted((theta[0], features.first_ratio) for theta, features in runs.items()
                     if np.isfinite(features.first_ratio))
-    if len(points) < 2 or not np.isfinite(target):
+    if not np.isfinite(target):
         return float("nan")
-    ratios, fs = np.asarray(points).T
-    return float(np.interp(target, ratios, fs))
+    found = float("nan")
+    for (fs_low, low), (fs_high, high) in pairwise(points):
+        if low <= target <= high and high > low:
+            found = fs_low + (fs_high - fs_low) * (target - low) / (high - low)
+    return found
 
 
 def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
@@ -688,6 +704,9 @@ def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
             (fs, fd, fs, 1.0)]
     return [(fs, fd, dc) for dc in (0.01, 0.03, 0.1, 0.3)]
 
+
+_COEFFICIENTS = ("fs", "fd", "fs_final")
+"""Parameters that are friction coefficients (scaled by a load-cell calibration error)."""
 
 _SIMPLEX = {"fs": 0.02, "fd": 0.005, "fs_final": 0.03, "runin_slips": 1.0, "dc": 0.03}
 
@@ -786,7 +805,14 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
             low = [min(a, t - h) for a, t, h in zip(low, theta, half, strict=True)]
             high = [max(b, t + h) for b, t, h in zip(high, theta, half, strict=True)]
             method = "secant"
+    # A scale error common to both load cells multiplies every T/|N|, hence every
+    # coefficient, alike; the slopes above, dominated by slips appearing and vanishing,
+    # do not see it, so each coefficient's interval holds at least its 95 % range.
+    scale = 1.96 * np.sqrt(2.0) * calibration_error
     for k, name in enumerate(names):
+        if name in _COEFFICIENTS:
+            low[k] = min(low[k], theta[k] * (1.0 - scale))
+            high[k] = max(high[k], theta[k] * (1.0 + scale))
         bounds = BOUNDS[name]
         low[k], high[k] = max(low[k], bounds[0]), min(high[k], bounds[1])
     fit = LawFit(law, dict(zip(names, theta, strict=True)), dict(zip(names, low, strict=True)),
