@@ -53,7 +53,8 @@ def main() -> None:
                        "--simulated-events", f"{r}/simulated/events.csv",
                        "--contact", f"{r}/simulated/contact.nc", "--map",
                        "results/map/map.nc", "-o", str(out / f"{t}.html"),
-                       "--pdf", str(out / f"{t}.pdf"), "--threads", os.environ.get("REPORT_THREADS", "2")]
+                       "--pdf", str(out / f"{t}.pdf"),
+                       "--threads", os.environ.get("REPORT_THREADS", "2")]
             if test["frames"]:
                 command += ["--kymograph", f"{r}/kymograph.nc", "--waves", f"{r}/waves.csv",
                             "--fused", f"{r}/events_video.csv", "--clock", f"{r}/clock.json",
