@@ -760,6 +760,13 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
         first = _first_slip_fs(objective.features, objective.measured.first_ratio)
         if np.isfinite(first):
             best = min([best, objective.clip((first, best[1]))], key=objective)
+    if law == "run-in":
+        # fs_final alone along a line: the later gross slips' valley is narrow, and the
+        # simplex, moving four parameters at once, steps over it
+        k = LAWS[law].index("fs_final")
+        line = [(*best[:k], best[k] + offset, *best[k + 1:])
+                for offset in (-0.1, -0.075, -0.05, -0.025, 0.025, 0.05, 0.075, 0.1)]
+        best = min([best, *(objective.clip(theta) for theta in line)], key=objective)
     scale = np.array([_SIMPLEX[name] for name in LAWS[law]])
     simplex = np.vstack([best, best + np.diag(scale)])
     minimize(objective, np.asarray(best), method="Nelder-Mead",
