@@ -646,11 +646,11 @@ def _first_slip_fs(runs: Mapping[tuple[float, ...], SlipFeatures], target: float
     >>> round(_first_slip_fs(runs, 0.58), 4)  # not between 0.62 and 0.72, where it falls
     0.8783
     """
+    found = float("nan")
+    if not np.isfinite(target):
+        return found
     points = sorted((theta[0], features.first_ratio) for theta, features in runs.items()
                     if np.isfinite(features.first_ratio))
-    if not np.isfinite(target):
-        return float("nan")
-    found = float("nan")
     for (fs_low, low), (fs_high, high) in pairwise(points):
         if low <= target <= high and high > low:
             found = fs_low + (fs_high - fs_low) * (target - low) / (high - low)
@@ -797,8 +797,8 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
             jacobian.append(None)
     history = [(point, value) for point, value in objective.history if np.isfinite(value)]
     theta, misfit = min(history, key=lambda item: item[1])
-    features = (3 * min(len(objective.measured.gross), MAX_GROSS) + 2
-                + 2 * int(np.isfinite(objective.measured.first_ratio)))
+    # the features a law is judged on: the residuals of the measurement against itself
+    features = feature_residuals(objective.measured, objective.measured).size
     low, high, method = _intervals(history, theta, misfit, features)
     if all(column is not None for column in jacobian):
         matrix = np.column_stack(jacobian)
