@@ -13,6 +13,8 @@ from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
 from slipwave.fit import (
+    RATIO_SIGMA,
+    SlipFeatures,
     _intervals,
     edge_threshold,
     feature_residuals,
@@ -69,7 +71,27 @@ def test_features_classify_by_edges_and_residuals_vanish_on_themselves(virtual):
     fewer = slip_features(events.iloc[:0], gross_edge_ratio=1.0, min_drop=0.3, duration=90.0,
                           sample_rate=100.0)
     missing = feature_residuals(fewer, features)
-    assert missing[0] == pytest.approx(0.1 / 0.005)  # a gross slip the simulation lacks
+    assert missing[0] == pytest.approx(0.1 / RATIO_SIGMA)  # a gross slip the simulation lacks
+
+
+def _cycle(count: int, period: float, before: float) -> SlipFeatures:
+    """Gross slips of one stick-slip cycle, from 20 s, every ``period`` seconds."""
+    gross = pd.DataFrame({"t_start": 20.0 + period * np.arange(count),
+                          "ratio_before": np.full(count, before),
+                          "ratio_after": np.full(count, 0.6), "drop": np.full(count, 8.0)})
+    return SlipFeatures(gross, 10, 0.3, 280.0, 100.0)
+
+
+def test_a_cycle_a_little_off_costs_once_not_per_slip():
+    """The law's own cycle: its offset, period and count are judged once each."""
+    measured = _cycle(40, 6.0, 0.70)
+    # every gross slip 0.01 higher: the cycle's offset, about (0.01 / 0.015)^2
+    higher = float(np.sum(feature_residuals(_cycle(40, 6.0, 0.71), measured) ** 2))
+    assert 0.3 < higher < 0.6
+    # a period 10 % longer, 36 slips instead of 40: a recurrence and a count 10 % off
+    # (0.4 sigma each), and the first slip on time; slip by slip it would be hundreds
+    longer = feature_residuals(_cycle(36, 6.6, 0.70), measured)
+    assert float(np.sum(longer**2)) == pytest.approx(2 * 0.4**2, rel=0.05)
 
 
 def test_first_slip_load_rises_steadily_with_fs(tmp_path):

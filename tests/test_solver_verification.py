@@ -8,7 +8,7 @@ import xarray as xr
 
 from slipwave.io import read_dataset, write_dataset
 from slipwave.solver import Coulomb, LoadPath, Slab, describe_behaviour, simulate
-from slipwave.solver.contact import SLIP, STICK, Body, Control
+from slipwave.solver.contact import OPEN, SLIP, STICK, Body, Control
 from slipwave.solver.simulate import RESIDUAL_TOLERANCE
 from slipwave.solver.slab import condense
 
@@ -243,3 +243,26 @@ def test_dataset_content_and_round_trip(bench_case, tmp_path):
     assert np.all(ds["gap"].values >= 0)
     back = read_dataset(write_dataset(ds, tmp_path / "sim.nc"))
     xr.testing.assert_equal(back, ds)
+
+
+@pytest.mark.parametrize(("zones", "compliance"), [((0.0, 0.8, 0.2), False),
+                                                   ((0.6, 0.1, 0.3), True)],
+                         ids=["stiffness form", "compliance form"])
+def test_a_zone_state_met_again_with_other_coefficients_solves_afresh(zones, compliance):
+    """Slip-weakening meets one zone state with many coefficients: the kept layout of
+    the state must not carry one coefficient into the next solve."""
+    slab = Slab(height=40.0)
+    condensed = condense(slab)
+    n = slab.initial_gap().size
+    rng = np.random.default_rng(3)
+    state = rng.choice(np.array([OPEN, STICK, SLIP], dtype=np.int8), size=n, p=zones)
+    s_prev = rng.normal(0.0, 1e-3, n)
+    control = Control(dx=0.01, N=LOAD / WIDTH, machine=0.0)
+    kept = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
+    for mu in (0.6, 0.9, 0.6):
+        fresh = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
+        np.testing.assert_array_equal(
+            kept.solve_linear(state, np.full(n, mu), s_prev, control)[0],
+            fresh.solve_linear(state, np.full(n, mu), s_prev, control)[0])
+    assert len(kept._layouts) == 1 and len(kept._plans) == 2
+    assert next(iter(kept._layouts.values())).compliance == compliance

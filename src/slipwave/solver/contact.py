@@ -46,6 +46,9 @@ _MAX_WEAKENINGS = 1000
 # run revisits few states (about 250 in a 280 s test on 80 elements, against some 4000
 # solves): kept, they spare a factorisation each; bounded by their bytes.
 _PLANS_BYTES = 128 * 2**20
+# Zone states whose layout is kept to factorise again with other coefficients of their
+# slipping nodes: a slip-weakening wave meets one state with some 30 coefficients.
+_LAYOUTS = 32
 
 
 class NotConverged(Exception):  # noqa: N818 - an internal signal, not an error of the API
@@ -130,6 +133,7 @@ class Body:
         # rigid mode (then only the stiffness form is used).
         self.C = compliance
         self._plans: dict[bytes, _Plan] = {}
+        self._layouts: dict[bytes, _Layout] = {}
         self._plans_bytes = 0
 
     def solve_linear(
@@ -166,11 +170,17 @@ class Body:
         """
         kinds = (control.dx is None, control.dy is None, control.T is not None,
                  control.N is not None)
-        key = (state.tobytes() + np.where(state == SLIP, mu, 0.0).tobytes() + bytes(kinds)
-               + np.float64(control.machine).tobytes())
+        shape = state.tobytes() + bytes(kinds) + np.float64(control.machine).tobytes()
+        key = shape + np.where(state == SLIP, mu, 0.0).tobytes()
         plan = self._plans.pop(key, None)  # put back last: the most recently used
         if plan is None:
-            plan = _Plan(self, state, mu, kinds, control.machine)
+            layout = self._layouts.pop(shape, None)
+            if layout is None:
+                layout = _Layout(self, state, kinds, control.machine)
+                while len(self._layouts) >= _LAYOUTS:
+                    self._layouts.pop(next(iter(self._layouts)))
+            self._layouts[shape] = layout
+            plan = _Plan(layout, mu)
             self._plans_bytes += plan.nbytes
             while self._plans and self._plans_bytes > _PLANS_BYTES:
                 self._plans_bytes -= self._plans.pop(next(iter(self._plans))).nbytes
@@ -486,17 +496,16 @@ def _block(matrix: np.ndarray, rows: np.ndarray, columns: np.ndarray) -> np.ndar
     return matrix.take(rows, axis=0).take(columns, axis=1)
 
 
-class _Plan:
-    """The factorised linear problem of one zone state (either form)."""
+class _Layout:
+    """What a zone state's linear problem is, whatever its slipping nodes' coefficients.
 
-    def __init__(
-        self,
-        body: Body,
-        state: np.ndarray,
-        mu: np.ndarray,
-        kinds: tuple[bool, ...],
-        machine: float = 0.0,
-    ) -> None:
+    The index sets and the blocks of K (or C) the equations read; under
+    slip-weakening one zone state meets many coefficients (the wave's fixed point),
+    and each of its :class:`_Plan` is then a few products away.
+    """
+
+    def __init__(self, body: Body, state: np.ndarray, kinds: tuple[bool, ...],
+                 machine: float) -> None:
         self.body = body
         self.machine = machine
         self.dx_unknown, self.dy_unknown, self.T_given, self.N_given = kinds
@@ -504,7 +513,6 @@ class _Plan:
         self.stick = state == STICK
         self.slip = state == SLIP
         self.contact = self.stick | self.slip
-        self.mu_slip = mu[self.slip]
         n_open = body.n - int(self.contact.sum())
         self.compliance = body.C is not None and int(self.stick.sum()) < n_open
         self.stick_x = ix[self.stick]
@@ -515,16 +523,16 @@ class _Plan:
         self.along_x[self.stick_x] = 1.0
         self.along_y = np.zeros(2 * body.n)
         self.along_y[self.contact_y] = 1.0
-        matrix = self._compliance_matrix() if self.compliance else self._stiffness_matrix()
-        self.size = matrix.shape[0]
-        self.nbytes = matrix.nbytes + (0 if self.compliance else self.k_rows.nbytes)
-        if self.size:
-            self.lu, self.piv, info = dgetrf(matrix, overwrite_a=True)
-            if info != 0 or not np.isfinite(self.lu).all():
-                raise NotConverged("singular zone state")
+        if self.compliance:
+            self._compliance_blocks()
+            blocks = (self.c_stuck, self.c_slip_y, self.c_slip_x)
+        else:
+            self._stiffness_blocks()
+            blocks = (self.k_rows, self.k_unknown, self.k_along)
+        self.nbytes = sum(block.nbytes for block in blocks)
 
     # Stiffness form: unknown displacements of open (x, y) and slipping (x) nodes.
-    def _stiffness_matrix(self) -> np.ndarray:
+    def _stiffness_blocks(self) -> None:
         body, ix, iy = self.body, self.body.ix, self.body.iy
         opened = ~self.contact
         self.unknown = np.concatenate([ix[self.slip | opened], iy[opened]])
@@ -534,75 +542,94 @@ class _Plan:
         # normal rows (Q - mu P). Gathered once, they serve the matrix, the flat's
         # columns and every right-hand side of this state.
         self.k_rows = body.K.take(np.concatenate([self.rows, self.slip_y]), axis=0)
-        M = self.k_rows.take(self.unknown, axis=1)
-        M = M[: self.rows.size] - np.pad(self.mu_slip[:, None] * M[self.rows.size :],
-                                         ((self.first_slip_row, 0), (0, 0)))
-        extra = []
-        if self.T_given:
-            extra.append(body.sum_x[self.unknown])
-        if self.N_given:
-            extra.append(body.sum_y[self.unknown])
-        M = np.vstack([M, *extra]) if extra else M
+        self.k_unknown = self.k_rows.take(self.unknown, axis=1)
+        self.extra_rows = [total for total, given in ((body.sum_x, self.T_given),
+                                                      (body.sum_y, self.N_given)) if given]
+        along = np.stack([self.along_x, self.along_y], axis=1)
+        self.k_along = self.k_rows @ along
+        self.extra_along = [total @ along for total in self.extra_rows]
+
+    # Compliance form: unknown forces Q, P of stuck nodes and P of slipping ones.
+    def _compliance_blocks(self) -> None:
+        body, ix, iy = self.body, self.body.ix, self.body.iy
+        C = body.C
+        assert C is not None
+        self.rows = np.concatenate([ix[self.stick], iy[self.contact]])
+        self.n_stick = int(self.stick.sum())
+        C_rows = C.take(self.rows, axis=0)
+        self.c_stuck = np.hstack([C_rows.take(ix[self.stick], axis=1),
+                                  C_rows.take(iy[self.stick], axis=1)])
+        self.c_slip_y = C_rows.take(iy[self.slip], axis=1)
+        self.c_slip_x = C_rows.take(ix[self.slip], axis=1)
+        self.row_along_x = np.zeros(self.rows.size)
+        self.row_along_x[: self.n_stick] = 1.0
+        self.row_along_y = 1.0 - self.row_along_x
+
+
+class _Plan:
+    """The factorised linear problem of one zone state (either form)."""
+
+    def __init__(self, layout: _Layout, mu: np.ndarray) -> None:
+        self.layout = layout
+        self.mu_slip = mu[layout.slip]
+        matrix = self._compliance_matrix() if layout.compliance else self._stiffness_matrix()
+        self.size = matrix.shape[0]
+        # its layout counted in full: a bound (plans of one layout share it)
+        self.nbytes = matrix.nbytes + layout.nbytes
+        if self.size:
+            self.lu, self.piv, info = dgetrf(matrix, overwrite_a=True)
+            if info != 0 or not np.isfinite(self.lu).all():
+                raise NotConverged("singular zone state")
+
+    def _stiffness_matrix(self) -> np.ndarray:
+        layout = self.layout
+        rows, first = layout.rows.size, layout.first_slip_row
+        M = layout.k_unknown[:rows].copy()
+        M[first:] -= self.mu_slip[:, None] * layout.k_unknown[rows:]
+        M = np.vstack([M, *(total[layout.unknown] for total in layout.extra_rows)])
         # What the flat's motion does to the equations: a column where it is
         # unknown, a right-hand side term where it is given.
-        along = np.stack([self.along_x, self.along_y], axis=1)
-        flat_x, flat_y = self._equations_of(along).T
-        self.flat_x, self.flat_y = flat_x.copy(), flat_y.copy()
-        if self.T_given:
-            self.flat_x[self.rows.size] += self.machine  # the machine spring on the flat
+        flat = layout.k_along[:rows].copy()
+        flat[first:] -= self.mu_slip[:, None] * layout.k_along[rows:]
+        flat = np.vstack([flat, *layout.extra_along])
+        self.flat_x, self.flat_y = flat[:, 0].copy(), flat[:, 1].copy()
+        if layout.T_given:
+            self.flat_x[rows] += layout.machine  # the machine spring on the flat
         columns = [M]
-        if self.dx_unknown:
+        if layout.dx_unknown:
             columns.append(self.flat_x[:, None])
-        if self.dy_unknown:
+        if layout.dy_unknown:
             columns.append(self.flat_y[:, None])
         return np.hstack(columns)
 
     def _equations_of(self, u: np.ndarray) -> np.ndarray:
-        """The equations' left-hand sides for the displacement(s) ``u`` (columns)."""
-        body = self.body
-        force = self.k_rows @ u  # K @ u at the rows the equations read
-        rows = force[: self.rows.size]
-        rows[self.first_slip_row :] -= (self.mu_slip * force[self.rows.size :].T).T
-        extra = []
-        if self.T_given:
-            extra.append(body.sum_x @ u)
-        if self.N_given:
-            extra.append(body.sum_y @ u)
-        return np.concatenate([rows, np.array(extra)]) if extra else rows
+        """The stiffness form's left-hand sides for the displacements ``u``."""
+        layout = self.layout
+        force = layout.k_rows @ u  # K @ u at the rows the equations read
+        rows = force[: layout.rows.size]
+        rows[layout.first_slip_row :] -= self.mu_slip * force[layout.rows.size :]
+        return np.concatenate([rows, [total @ u for total in layout.extra_rows]])
 
-    # Compliance form: unknown forces Q, P of stuck nodes and P of slipping ones.
     def _compliance_matrix(self) -> np.ndarray:
-        body, ix, iy = self.body, self.body.ix, self.body.iy
-        C = body.C
-        assert C is not None
-        stick, slip = self.stick, self.slip
-        self.rows = np.concatenate([ix[stick], iy[self.contact]])
-        self.n_stick = int(stick.sum())
-        C_rows = C.take(self.rows, axis=0)
-        M = np.hstack([
-            C_rows.take(ix[stick], axis=1),
-            C_rows.take(iy[stick], axis=1),
-            C_rows.take(iy[slip], axis=1) + C_rows.take(ix[slip], axis=1) * self.mu_slip,
-        ])
-        self.row_along_x = np.zeros(self.rows.size)
-        self.row_along_x[: self.n_stick] = 1.0
-        self.row_along_y = 1.0 - self.row_along_x
-        columns = [M]
-        if self.dx_unknown:
-            columns.append(-self.row_along_x[:, None])
-        if self.dy_unknown:
-            columns.append(-self.row_along_y[:, None])
+        layout = self.layout
+        mu = self.mu_slip
+        columns = [layout.c_stuck, layout.c_slip_y + layout.c_slip_x * mu]
+        if layout.dx_unknown:
+            columns.append(-layout.row_along_x[:, None])
+        if layout.dy_unknown:
+            columns.append(-layout.row_along_y[:, None])
         M = np.hstack(columns)
         width = M.shape[1]
-        zeros = np.zeros(self.n_stick)
+        n_stick = layout.n_stick
+        zeros = np.zeros(n_stick)
         extra = []
-        if self.T_given:
-            extra.append(np.concatenate([np.ones(self.n_stick), zeros, self.mu_slip]))
-        if self.N_given:
-            extra.append(np.concatenate([zeros, np.ones(self.n_stick), np.ones(self.mu_slip.size)]))
+        if layout.T_given:
+            extra.append(np.concatenate([np.ones(n_stick), zeros, mu]))
+        if layout.N_given:
+            extra.append(np.concatenate([zeros, np.ones(n_stick), np.ones(mu.size)]))
         padded = [np.pad(row, (0, width - row.size)) for row in extra]
-        if self.T_given and self.dx_unknown:
-            padded[0][2 * self.n_stick + self.mu_slip.size] = self.machine
+        if layout.T_given and layout.dx_unknown:
+            padded[0][2 * n_stick + mu.size] = layout.machine
         return np.vstack([M, *padded]) if padded else M
 
     def _solve(self, b: np.ndarray) -> np.ndarray:
@@ -615,30 +642,31 @@ class _Plan:
 
     def solve(self, s_prev: np.ndarray, control: Control) -> tuple[np.ndarray, float, float]:
         """Displacements, dx and dy for this zone state and these loads."""
-        body = self.body
-        totals = [v for v, given in ((control.T, self.T_given), (control.N, self.N_given))
+        layout = self.layout
+        body = layout.body
+        totals = [v for v, given in ((control.T, layout.T_given), (control.N, layout.N_given))
                   if given]
-        if self.compliance:
-            b = np.concatenate([s_prev[self.stick], -body.g0[self.contact]])
+        if layout.compliance:
+            b = np.concatenate([s_prev[layout.stick], -body.g0[layout.contact]])
             if control.dx is not None:
-                b += control.dx * self.row_along_x
+                b += control.dx * layout.row_along_x
             if control.dy is not None:
-                b += control.dy * self.row_along_y
+                b += control.dy * layout.row_along_y
             z = self._solve(np.concatenate([b, totals]))
-            n_stick, n_slip = self.n_stick, self.mu_slip.size
+            n_stick, n_slip = layout.n_stick, self.mu_slip.size
             r = np.zeros(2 * body.n)
-            r[self.stick_x] = z[:n_stick]
-            r[self.stick_x + body.n] = z[n_stick : 2 * n_stick]
-            r[self.slip_y] = z[2 * n_stick : 2 * n_stick + n_slip]
-            r[self.slip_x] = self.mu_slip * r[self.slip_y]
+            r[layout.stick_x] = z[:n_stick]
+            r[layout.stick_x + body.n] = z[n_stick : 2 * n_stick]
+            r[layout.slip_y] = z[2 * n_stick : 2 * n_stick + n_slip]
+            r[layout.slip_x] = self.mu_slip * r[layout.slip_y]
             k = 2 * n_stick + n_slip
             dx = control.dx if control.dx is not None else float(z[k])
             dy = control.dy if control.dy is not None else float(z[-1])
             assert body.C is not None
             return body.C @ r, dx, dy
         base = np.zeros(2 * body.n)
-        base[self.stick_x] = s_prev[self.stick]
-        base[self.contact_y] = -body.g0[self.contact]
+        base[layout.stick_x] = s_prev[layout.stick]
+        base[layout.contact_y] = -body.g0[layout.contact]
         b = np.zeros(self.size) if self.size else np.zeros(0)
         b[len(b) - len(totals):] = totals
         b -= self._equations_of(base)
@@ -647,9 +675,9 @@ class _Plan:
         if control.dy is not None:
             b -= control.dy * self.flat_y
         z = self._solve(b)
-        k = self.unknown.size
+        k = layout.unknown.size
         dx = control.dx if control.dx is not None else float(z[k])
         dy = control.dy if control.dy is not None else float(z[-1])
-        u = base + dx * self.along_x + dy * self.along_y
-        u[self.unknown] = z[:k]
+        u = base + dx * layout.along_x + dy * layout.along_y
+        u[layout.unknown] = z[:k]
         return u, dx, dy
