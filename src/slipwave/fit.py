@@ -83,8 +83,9 @@ the smallest hide in the noise; for gross slips, the cycle the law settles in (s
 in another."""
 PAIRED_GROSS = 5
 """The first gross slips, whose T/|N| before is fitted one by one (a run-in's rise);
-the later ones by their median, as T/|N| after all of them: paired in order they
-would turn one slip more or less in the cycle into a misfit of every later pair."""
+the later ones by their quartiles, as T/|N| after all of them: paired in order they
+would turn one slip more or less in the cycle into a misfit of every later pair,
+whereas their spread (slips that stop short of fd under slip-weakening) is kept."""
 REJECTED_AIC = 10.0
 """A law whose AIC exceeds the best one's by more is rejected (Burnham & Anderson: no
 support)."""
@@ -401,8 +402,9 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     """Weighted differences simulated - measured, one per feature.
 
     T/|N| before each of the first :data:`PAIRED_GROSS` measured gross slips, paired
-    in order, and the median over the later ones; the median T/|N| after every gross
-    slip (a gross slip or median the simulation lacks counts as T/|N| 0.1 away); the
+    in order, and the quartiles over the later ones; the quartiles of T/|N| after every
+    gross slip (a gross slip or quartile the simulation lacks counts as T/|N| 0.1
+    away); the
     time of the first gross slip (missing: the recording's end) and the gross slips'
     median recurrence; the numbers of gross and of partial slips; and, where the
     measurement has a slip, T/|N| before the first slip of any kind and its time
@@ -442,11 +444,11 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     ...                       "ratio_after": [0.6], "drop": [8.0]})
     >>> one = SlipFeatures(gross, 2, 0.3, 60.0, 100.0)
     >>> feature_residuals(one, one).tolist()
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     >>> first = SlipFeatures(gross, 2, 0.3, 60.0, 100.0, first_time=4.0, first_ratio=0.5)
     >>> later = SlipFeatures(gross, 2, 0.3, 60.0, 100.0, first_time=5.0, first_ratio=0.52)
     >>> feature_residuals(later, first).round(3).tolist()  # T/|N| 0.02 and 1 s later
-    [0.0, 0.0, 1.265, 0.0, 1.0, 0.0, 0.0, 0.0]
+    [0.0, 0.0, 0.0, 0.0, 1.265, 0.0, 1.0, 0.0, 0.0, 0.0]
 
     A gross slip 0.01 higher is mostly the cycle's offset: it costs about 0.4, not 4.
 
@@ -460,12 +462,12 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     measured_before = m["ratio_before"].to_numpy(dtype=float)
     simulated_before = s["ratio_before"].to_numpy(dtype=float)
     measured_ratios = [
-        np.concatenate([measured_before[:paired], _median(measured_before[paired:])]),
-        _median(m["ratio_after"].to_numpy(dtype=float))]
+        np.concatenate([measured_before[:paired], _quartiles(measured_before[paired:])]),
+        _quartiles(m["ratio_after"].to_numpy(dtype=float))]
     simulated_ratios = [
         np.concatenate([simulated_before[:paired],
-                        _median(simulated_before[paired:]) if later else []]),
-        _median(s["ratio_after"].to_numpy(dtype=float)) if len(m) else np.zeros(0)]
+                        _quartiles(simulated_before[paired:]) if later else []]),
+        _quartiles(s["ratio_after"].to_numpy(dtype=float)) if len(m) else np.zeros(0)]
     simulated_times = [s["t_start"].to_numpy(dtype=float)[: min(1, len(m))]]
     measured_times = [m["t_start"].to_numpy(dtype=float)[:1]]
     if np.isfinite(measured.first_ratio):
@@ -516,9 +518,9 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     return np.concatenate([d, np.concatenate(t) / timing, counts, prior])
 
 
-def _median(values: np.ndarray) -> np.ndarray:
-    """The median as a one-element array; none of none."""
-    return np.median(values, keepdims=True) if values.size else np.zeros(0)
+def _quartiles(values: np.ndarray) -> np.ndarray:
+    """The quartiles (25, 50 and 75 %); none of none."""
+    return np.quantile(values, [0.25, 0.5, 0.75]) if values.size else np.zeros(0)
 
 
 def _recurrence(gross: pd.DataFrame) -> float:
