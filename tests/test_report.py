@@ -118,11 +118,11 @@ def built(tmp_path_factory):
         "test_id": "v", "verdicts": comparison["verdict"].value_counts().to_dict()}})
     pages["campaign"] = write_campaign_report(content, folder / "campaign.html",
                                               pdf=folder / "campaign.pdf")
-    return pages, comparison
+    return pages, comparison, replay.recording.attrs["gross_edge_ratio"], fit["edge_threshold"]
 
 
 def test_full_report_says_what_it_compares(built):
-    pages, comparison = built
+    pages, comparison, *_ = built
     html = pages["full"].read_text()
     for heading in ("Configuration", "Comparison", "Signals", "First gross slips",
                     "Space and time", "Friction laws", "Events", "Channels"):
@@ -131,17 +131,21 @@ def test_full_report_says_what_it_compares(built):
         assert feature.replace("|", "|") in html
     assert "no video: the simulated zones and kymograph are shown alone" in html
     assert "measured: least squares of DT on t and T" in html  # sources of the setup
+    # the threshold the events were told by (the simulation's), and the fit's own
+    _, _, detection, fitted = built
+    assert f"DG/DD jump ratio of {detection:.3g} or more, read off the simulated slips" in html
+    assert f"the fit judged its laws' features by {fitted:.3g}" in html
 
 
 def test_figures_drawn_on_two_processes_are_those_drawn_on_one(built):
-    pages, _ = built
+    pages, *_ = built
     full = pages["full"].read_text()
     assert full == pages["serial"].read_text()
     assert full.count("data:image/png;base64,") >= 5
 
 
 def test_partial_reports_say_what_is_missing(built):
-    pages, _ = built
+    pages, *_ = built
     measured = pages["measured"].read_text()
     assert "no simulation: the measurement alone" in measured
     assert "<h2>Events</h2>" in measured and "<h2>Comparison</h2>" not in measured
@@ -153,7 +157,7 @@ def test_partial_reports_say_what_is_missing(built):
 @pytest.mark.parametrize("name", ["full", "measured", "force", "campaign"])
 @pytest.mark.parametrize("width", [1280, 800])
 def test_pages_render_in_chromium_without_broken_images_or_overflow(built, name, width):
-    pages, _ = built
+    pages, *_ = built
     found = chromium_check(pages[name], width)
     assert found["images"] >= 1 and found["broken"] == 0
     assert found["page"] <= found["window"] and not found["outside"], found
@@ -168,7 +172,7 @@ def test_pages_render_in_chromium_without_broken_images_or_overflow(built, name,
     ("campaign", ("Tests", "T/|N| and fitted friction against H/L"), 1),
 ])
 def test_pdfs_have_their_pages_sections_and_figures(built, name, sections, least_images):
-    pages, comparison = built
+    pages, comparison, *_ = built
     pdf = pages[name].with_suffix(".pdf")
     count, text, images = pdf_facts(pdf)
     assert count >= 1 and f"page 1 of {count}" in text

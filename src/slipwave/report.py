@@ -266,7 +266,11 @@ def pairing_summary(
         "figures": dict.fromkeys(("signals", "zooms", "ratios", "space_time", "frames",
                                   "map")),
         "placement": placement, "missing": missing, "edge_reference": None,
-        "edge_threshold": None, "elements": None, "frame_labels": []}
+        "edge_threshold": None, "fit_edge_threshold": None, "elements": None,
+        "frame_labels": []}
+    if simulated is not None and "gross_edge_ratio" in simulated.attrs:
+        # what detection told the test's events by, read off the simulation's slips
+        summary["edge_threshold"] = float(simulated.attrs["gross_edge_ratio"])
     if fit is None:
         missing.append("no fit: the test was not fitted (fit.enabled is false, or its files "
                        "lack what the simulation needs), so no configuration, friction law "
@@ -274,7 +278,7 @@ def pairing_summary(
     else:
         setup = fit["setup"]
         summary["edge_reference"] = setup.get("edge_reference")
-        summary["edge_threshold"] = fit.get("edge_threshold")
+        summary["fit_edge_threshold"] = fit.get("edge_threshold")
         for key, (meaning, unit) in SETTING_MEANINGS.items():
             if key in setup:
                 summary["setup"].append({"key": key, "meaning": meaning, "unit": unit,
