@@ -404,11 +404,10 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     T/|N| before each of the first :data:`PAIRED_GROSS` measured gross slips, paired
     in order, and the quartiles over the later ones; the quartiles of T/|N| after every
     gross slip (a gross slip or quartile the simulation lacks counts as T/|N| 0.1
-    away); the
-    time of the first gross slip (missing: the recording's end) and the gross slips'
-    median recurrence; the numbers of gross and of partial slips; and, where the
-    measurement has a slip, T/|N| before the first slip of any kind and its time
-    (missing: as a missing gross slip). Each T/|N| is uncertain by
+    away); the time of the first gross slip (missing: the recording's end) and the
+    gross slips' median recurrence; the numbers of gross and of partial slips; and,
+    where the measurement has a slip, T/|N| before the first slip of any kind and its
+    time (missing: as a missing gross slip). Each T/|N| is uncertain by
     :data:`RATIO_SIGMA`; those before the gross slips also share an offset b, a
     nuisance of standard deviation :data:`SEQUENCE_SIGMA` (the cycle the law settles
     in), profiled out in closed form, its prior b / sd a residual; the first slip's
