@@ -33,14 +33,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
+import xarray as xr
 
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
 from slipwave.bench.replay import replay_test
-from slipwave.bench.setup import read_test_setup
+from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.compare import compare_test, verdict_counts
 from slipwave.events import detect_events
-from slipwave.fit import chosen_law, fit_test, law_of, measured_events
+from slipwave.fit import LAWS, chosen_law, fit_test, law_of, measured_events
 from slipwave.io import read_acquisition
+from slipwave.solver import Coulomb
 from targets import check, finish
 
 ROOT = Path(__file__).parents[1]
@@ -65,6 +68,24 @@ def hidden_tests(count: int, seed: int = 2026) -> list[tuple[dict[str, Any], int
     return tests
 
 
+def replay_and_compare(setup: TestSetup, recording: xr.Dataset, law: Coulomb,
+                       min_drop: float) -> tuple[pd.DataFrame, float, float]:
+    """The test against a law's simulation: the comparison table, and the seconds spent
+    simulating and comparing."""
+    began = time.perf_counter()
+    replay = replay_test(setup, law, elements=ELEMENTS, kymograph=False, min_drop=min_drop)
+    simulated = time.perf_counter()
+    measured = detect_events(recording,
+                             gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    table = compare_test(measured, replay.recording, replay.simulation, min_drop=min_drop)
+    return table, simulated - began, time.perf_counter() - simulated
+
+
+def differing(table: pd.DataFrame) -> list[str]:
+    """The features a comparison says differ."""
+    return table.loc[table["verdict"] == "differs", "feature"].tolist()
+
+
 def run_test(truth: dict[str, Any], seed: int, laws: list[str],
              also: str | None = None) -> dict[str, Any]:
     spec = BenchTest(f"hidden{seed}", elements=ELEMENTS, video="none", **truth)
@@ -74,48 +95,29 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str],
         recording = read_acquisition(csv)
     setup = read_test_setup(recording, {"test_id": spec.test_id, **CELLS})
     events = measured_events(recording)
+    min_drop = float(events.attrs["min_drop"])
     began = time.perf_counter()
     fit = fit_test(setup, events, laws=laws, elements=ELEMENTS)
-    fitted = time.perf_counter()
-    replay = replay_test(setup, chosen_law(fit), elements=ELEMENTS, kymograph=False,
-                         min_drop=float(events.attrs["min_drop"]))
-    simulated = time.perf_counter()
-    measured = detect_events(recording,
-                             gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
-    table = compare_test(measured, replay.recording, replay.simulation,
-                         min_drop=float(events.attrs["min_drop"]))
-    compared = time.perf_counter()
-    result = {"truth": truth, "seed": seed,
-              "fit": {k: v for k, v in fit.items() if k != "setup"},
-              "verdicts": verdict_counts(table),
-              "differs": table.loc[table["verdict"] == "differs", "feature"].tolist(),
-              "seconds": {"fit": fitted - began, "simulate": simulated - fitted,
-                          "compare": compared - simulated}}
+    fitted = time.perf_counter() - began
+    table, simulate_s, compare_s = replay_and_compare(setup, recording, chosen_law(fit),
+                                                      min_drop)
     # the test against its true law's simulation: what the comparison asks even of the
     # truth (the model's own sequence of slips, from the setup measured on the files)
-    names = ("fs", "fd") if truth["fs_final"] is None else ("fs", "fd", "fs_final",
-                                                             "runin_slips")
-    true_law = law_of("coulomb" if len(names) == 2 else "run-in",
-                      {name: truth[name] for name in names})
-    replay = replay_test(setup, true_law, elements=ELEMENTS, kymograph=False,
-                         min_drop=float(events.attrs["min_drop"]))
-    table = compare_test(detect_events(recording, gross_edge_ratio=replay.recording.attrs[
-        "gross_edge_ratio"]), replay.recording, replay.simulation,
-        min_drop=float(events.attrs["min_drop"]))
-    result["truth_differs"] = table.loc[table["verdict"] == "differs", "feature"].tolist()
+    true_name = "coulomb" if truth["fs_final"] is None else "run-in"
+    true_law = law_of(true_name, {name: truth[name] for name in LAWS[true_name]})
+    truth_table, *_ = replay_and_compare(setup, recording, true_law, min_drop)
+    result = {"truth": truth, "seed": seed,
+              "fit": {k: v for k, v in fit.items() if k != "setup"},
+              "verdicts": verdict_counts(table), "differs": differing(table),
+              "truth_differs": differing(truth_table),
+              "seconds": {"fit": fitted, "simulate": simulate_s, "compare": compare_s}}
     if also is not None:
         # the test against another fitted law's simulation: what that law cannot reproduce
         law = law_of(also, {name: value["value"] for name, value
                             in fit["laws"][also]["parameters"].items()})
-        replay = replay_test(setup, law, elements=ELEMENTS, kymograph=False,
-                             min_drop=float(events.attrs["min_drop"]))
-        measured = detect_events(recording,
-                                 gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
-        table = compare_test(measured, replay.recording, replay.simulation,
-                             min_drop=float(events.attrs["min_drop"]))
-        result["also"] = {"law": also, "verdicts": verdict_counts(table),
-                          "differs": table.loc[table["verdict"] == "differs",
-                                               "feature"].tolist()}
+        also_table, *_ = replay_and_compare(setup, recording, law, min_drop)
+        result["also"] = {"law": also, "verdicts": verdict_counts(also_table),
+                          "differs": differing(also_table)}
     return result
 
 
