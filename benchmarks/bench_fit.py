@@ -37,7 +37,7 @@ import pandas as pd
 import xarray as xr
 
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
-from slipwave.bench.replay import replay_test
+from slipwave.bench.replay import replay_test, sequence_scatter
 from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.compare import compare_test, verdict_counts
 from slipwave.events import detect_events
@@ -71,13 +71,16 @@ def hidden_tests(count: int, seed: int = 2026) -> list[tuple[dict[str, Any], int
 def replay_and_compare(setup: TestSetup, recording: xr.Dataset, law: Coulomb,
                        min_drop: float) -> tuple[pd.DataFrame, float, float]:
     """The test against a law's simulation: the comparison table, and the seconds spent
-    simulating and comparing."""
+    simulating (the law and its neighbours, as the simulate rule does) and comparing."""
     began = time.perf_counter()
     replay = replay_test(setup, law, elements=ELEMENTS, kymograph=False, min_drop=min_drop)
+    threshold = replay.recording.attrs["gross_edge_ratio"]
+    scatter = sequence_scatter(setup, law, min_drop=min_drop, gross_edge_ratio=threshold,
+                               elements=ELEMENTS)
     simulated = time.perf_counter()
-    measured = detect_events(recording,
-                             gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
-    table = compare_test(measured, replay.recording, replay.simulation, min_drop=min_drop)
+    measured = detect_events(recording, gross_edge_ratio=threshold)
+    table = compare_test(measured, replay.recording, replay.simulation, min_drop=min_drop,
+                         scatter=scatter)
     return table, simulated - began, time.perf_counter() - simulated
 
 

@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 
 from slipwave.bench.generate import BenchTest, simulate_test
-from slipwave.bench.replay import replay_test
+from slipwave.bench.replay import replay_test, sequence_scatter
 from slipwave.bench.setup import read_test_setup
-from slipwave.compare import COMPARISON_COLUMNS, compare_test, place_on_map, verdict_counts
+from slipwave.compare import (
+    COMPARISON_COLUMNS,
+    EVENT_FEATURES,
+    SCATTER_STEP,
+    compare_test,
+    event_features,
+    place_on_map,
+    verdict_counts,
+)
 from slipwave.events import detect_events
 from slipwave.io import CHANNELS
 from slipwave.solver import Coulomb
@@ -73,6 +82,48 @@ def test_a_wrong_law_is_flagged(test_and_replay):
     verdicts = table.set_index("feature")["verdict"]
     assert verdicts["T/|N| at gross slips, after (dynamic)"] == "differs"
     assert verdict_counts(table)["differs"] >= 3
+
+
+def test_the_law_s_neighbours_give_the_simulation_s_own_scatter(test_and_replay):
+    result, setup, replay = test_and_replay
+    threshold = replay.recording.attrs["gross_edge_ratio"]
+    scatter = sequence_scatter(setup, Coulomb(fs=0.9, fd=0.6), min_drop=0.3, elements=24,
+                               gross_edge_ratio=threshold)
+    assert np.allclose(scatter[["fs", "fd"]], [
+        [0.9 * (1 - SCATTER_STEP), 0.6], [0.9 * (1 + SCATTER_STEP), 0.6],
+        [0.9, 0.6 * (1 - SCATTER_STEP)], [0.9, 0.6 * (1 + SCATTER_STEP)]])
+    assert {feature.name for feature in EVENT_FEATURES} < set(scatter.columns)
+    assert (scatter["gross slips"] > 0).all()
+    measured = detect_events(result.recording, gross_edge_ratio=threshold)
+    alone = compare_test(measured, replay.recording, replay.simulation, min_drop=0.3)
+    table = compare_test(measured, replay.recording, replay.simulation, min_drop=0.3,
+                         scatter=scatter)
+    compared = table["verdict"] != "not compared"
+    assert (table.loc[compared, "scatter"] >= 0).all()
+    assert (table.loc[compared, "tolerance"] >= alone.loc[compared, "tolerance"] - 1e-12).all()
+    assert verdict_counts(table)["differs"] == 0
+
+
+def test_a_difference_within_the_law_s_scatter_agrees_and_says_so(test_and_replay):
+    result, setup, _ = test_and_replay
+    wrong = replay_test(setup, Coulomb(fs=1.3, fd=0.45), min_drop=0.3, elements=24, kymograph=False)
+    measured = detect_events(result.recording,
+                             gross_edge_ratio=wrong.recording.attrs["gross_edge_ratio"])
+    dynamic = "T/|N| at gross slips, after (dynamic)"
+    alone = compare_test(measured, wrong.recording, wrong.simulation, min_drop=0.3)
+    difference = float(alone.set_index("feature").loc[dynamic, "difference"])
+    # neighbours whose T/|N| after gross slips spreads as far as the difference
+    simulated = event_features(alone.attrs["simulated_events"])[dynamic]
+    scatter = pd.DataFrame({dynamic: [simulated - difference, simulated + difference]})
+    table = compare_test(measured, wrong.recording, wrong.simulation, min_drop=0.3,
+                         scatter=scatter).set_index("feature")
+    assert alone.set_index("feature").loc[dynamic, "verdict"] == "differs"
+    assert table.loc[dynamic, "verdict"] == "agrees"
+    assert table.loc[dynamic, "note"] == "within the law's own scatter"
+    others = table.index != dynamic
+    assert np.allclose(table.loc[others, "tolerance"].astype(float),
+                       alone.set_index("feature").loc[others, "tolerance"].astype(float),
+                       equal_nan=True)
 
 
 def test_place_on_map_picks_the_nearest_case():

@@ -21,7 +21,7 @@ import pandas as pd
 import pytest
 
 from slipwave.bench.generate import BenchTest, simulate_test
-from slipwave.bench.replay import replay_test
+from slipwave.bench.replay import replay_test, sequence_scatter
 from slipwave.bench.setup import read_test_setup
 from slipwave.compare import compare_test
 from slipwave.events import detect_events, events_dataset, segment_phases
@@ -98,7 +98,10 @@ def built(tmp_path_factory):
     replay = replay_test(setup, chosen_law(fit), min_drop=0.3, elements=24)
     table = detect_events(recording, gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
     events = events_dataset(table, segment_phases(recording, table))
-    comparison = compare_test(table, replay.recording, replay.simulation, min_drop=0.3)
+    scatter = sequence_scatter(setup, chosen_law(fit), min_drop=0.3, elements=24,
+                               gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    comparison = compare_test(table, replay.recording, replay.simulation, min_drop=0.3,
+                              scatter=scatter)
     simulated_events = comparison.attrs["simulated_events"]
     pairing = pairing_summary(recording, events, fit, comparison, replay.recording,
                               simulated_events, replay.contact)
@@ -129,6 +132,10 @@ def test_full_report_says_what_it_compares(built):
         assert f"<h2>{heading}</h2>" in html
     for feature in comparison["feature"]:
         assert feature.replace("|", "|") in html
+    # the simulated values with the law's own scatter, where it has one
+    scattered = comparison[comparison["scatter"] > 0]
+    assert len(scattered) and all(f"± {value:.2g}</span>" in html
+                                  for value in scattered["scatter"])
     assert "no video: the simulated zones and kymograph are shown alone" in html
     assert "measured: least squares of DT on t and T" in html  # sources of the setup
     # the threshold the events were told by (the simulation's), and the fit's own

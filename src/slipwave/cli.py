@@ -131,6 +131,7 @@ def _fit(args: argparse.Namespace) -> None:
 def _compare(args: argparse.Namespace) -> None:
     import json
 
+    import pandas as pd
     import xarray as xr
 
     from slipwave.compare import compare_test, place_on_map, verdict_counts
@@ -141,14 +142,12 @@ def _compare(args: argparse.Namespace) -> None:
     events_ds = read_dataset(args.events)
     measured = events_table(events_ds)
     fit = read_fit(args.fit)
-    waves = None
-    if args.waves is not None:
-        import pandas as pd
-        waves = pd.read_csv(args.waves)
+    waves = pd.read_csv(args.waves) if args.waves is not None else None
     table = compare_test(measured, read_dataset(args.simulated),
                          read_dataset(args.steps) if args.steps else None, waves,
                          min_drop=float(events_ds.attrs.get("min_drop", float("nan")))
-                         if "min_drop" in events_ds.attrs else None)
+                         if "min_drop" in events_ds.attrs else None,
+                         scatter=pd.read_csv(args.scatter) if args.scatter else None)
     summary: dict[str, Any] = {"test_id": fit["test_id"], "law": fit["chosen"],
                                "parameters": fit["parameters"],
                                "verdicts": verdict_counts(table)}
@@ -348,16 +347,16 @@ def _simulate(args: argparse.Namespace) -> None:
 
 
 def _simulate_test(args: argparse.Namespace) -> None:
-    from slipwave.bench.replay import replay_test
+    from slipwave.bench.replay import replay_test, sequence_scatter
     from slipwave.bench.setup import TestSetup
     from slipwave.fit import chosen_law, read_fit
-    from slipwave.io import write_dataset
+    from slipwave.io import atomic_output, write_dataset
 
     fit = read_fit(str(args.fit))
     setup = TestSetup.from_dict(fit["setup"])
-    replay = replay_test(setup, chosen_law(fit), elements=int(fit["elements"]),
-                         sample_rate=args.sample_rate,
-                         min_drop=float(fit["measured"]["min_drop_n"]),
+    law, min_drop = chosen_law(fit), float(fit["measured"]["min_drop_n"])
+    replay = replay_test(setup, law, elements=int(fit["elements"]),
+                         sample_rate=args.sample_rate, min_drop=min_drop,
                          kymograph=args.contact is not None)
     write_dataset(replay.recording, args.output)
     if args.contact is not None:
@@ -366,6 +365,12 @@ def _simulate_test(args: argparse.Namespace) -> None:
         # the nodal displacements are the bulk of it, and the contact history has them
         steps = replay.simulation.drop_vars(["ux", "uy", "ux_before_wave", "uy_before_wave"])
         write_dataset(steps, args.steps)
+    if args.scatter is not None:
+        scatter = sequence_scatter(setup, law, elements=int(fit["elements"]),
+                                   sample_rate=args.sample_rate, min_drop=min_drop,
+                                   gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+        with atomic_output(args.scatter) as temporary:
+            scatter.to_csv(temporary, index=False, float_format="%.6g")
     print(f"{args.fit} -> {args.output}: {fit['chosen']} "
           f"{', '.join(f'{k} {v:.4g}' for k, v in fit['parameters'].items())}, "
           f"{replay.simulation.sizes['step']} steps, gross/partial edge threshold "
@@ -583,6 +588,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --fit: also write the solver's steps")
     sim.add_argument("--sample-rate", type=_positive_float, default=100.0,
                      help="with --fit: sampling rate of the simulated recording, Hz")
+    sim.add_argument("--scatter", type=Path, default=None,
+                     help="with --fit: also simulate the law at coefficients a load cell's "
+                     "calibration apart and write their compared features (CSV), the "
+                     "simulation's own scatter for 'slipwave compare --scatter'")
     sim.add_argument("--fd", type=float, default=None, help="dynamic coefficient (fs)")
     _load_path_arguments(sim, normal_control="displacement", normal_friction="on")
     sim.add_argument("--max-travel", type=float, default=None,
@@ -723,6 +732,9 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("events", type=Path, help="events netCDF of 'slipwave detect'")
     compare.add_argument("--simulated", type=Path, required=True,
                          help="simulated recording of 'slipwave simulate --fit'")
+    compare.add_argument("--scatter", type=Path, default=None,
+                         help="neighbouring simulations' features ('slipwave simulate "
+                         "--scatter'): the simulation's own scatter widens the tolerances")
     compare.add_argument("--steps", type=Path, default=None,
                          help="the solver's steps ('slipwave simulate --steps')")
     compare.add_argument("--fit", type=Path, required=True, help="fit.json")

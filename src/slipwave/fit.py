@@ -386,15 +386,39 @@ def simulated_events(simulation: xr.Dataset, setup: TestSetup, *, min_drop: floa
         As :func:`~slipwave.events.detect_events`.
 
     """
+    recording = simulated_recording(simulation, setup, sample_rate=sample_rate)
+    recording.attrs["test_id"] = setup.test_id
+    return detect_events(recording, min_drop=min_drop, edge_convention="x_axis")
+
+
+def simulated_recording(simulation: xr.Dataset, setup: TestSetup, *,
+                        sample_rate: float) -> xr.Dataset:
+    """A simulation as the test's card records it, noise-free.
+
+    Parameters
+    ----------
+    simulation
+        From :func:`slipwave.solver.simulate` with the test's bench spec.
+    setup
+        The test's setup (speed, normal loading time, duration, edge reference).
+    sample_rate
+        The card's sampling rate, Hz.
+
+    Returns
+    -------
+    xarray.Dataset
+        T, N, DG, DD, DT against time (:func:`slipwave.bench.sensors.clean_signals`),
+        the edges read against the flat when the test's sensors are.
+
+    """
     recording = clean_signals(simulation, speed=setup["speed_mm_s"],
                               loading_time=setup["loading_time_s"],
                               duration=setup["duration_s"], sample_rate=sample_rate,
                               wave_speed=WAVE_SPEED_MM_S)
-    if setup.edge_reference == "flat":
+    if setup.edge_reference == "flat":  # the sensors read the edges against the flat
         for channel in ("DG", "DD"):
             recording[channel] = recording[channel] - recording["DT"]
-    recording.attrs["test_id"] = setup.test_id
-    return detect_events(recording, min_drop=min_drop, edge_convention="x_axis")
+    return recording
 
 
 def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,

@@ -14,6 +14,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from slipwave import __version__
+from slipwave.compare import SCATTER_STEP
 from slipwave.errors import warning_lines
 from slipwave.events import EVENT_COLUMNS, events_table, wave_counts
 from slipwave.io import CHANNELS, atomic_output
@@ -256,8 +257,9 @@ def pairing_summary(
         ``setup`` (rows with sources), ``laws`` (rows), ``chosen``, ``comparison``
         (rows) and ``verdicts``, figures (matplotlib, drawn by
         :func:`render_test_page`: ``signals``, ``zooms``,
-        ``ratios``, ``space_time``, ``frames``, ``map``), ``placement`` and ``missing``
-        (what could not be shown, in words).
+        ``ratios``, ``space_time``, ``frames``, ``map``), ``placement``, ``missing``
+        (what could not be shown, in words) and ``scatter_step`` (how far apart the
+        coefficients of the comparison's neighbouring simulations are).
 
     """
     missing: list[str] = []
@@ -267,7 +269,7 @@ def pairing_summary(
                                   "map")),
         "placement": placement, "missing": missing, "edge_reference": None,
         "edge_threshold": None, "fit_edge_threshold": None, "elements": None,
-        "frame_labels": []}
+        "frame_labels": [], "scatter_step": SCATTER_STEP}
     if simulated is not None and "gross_edge_ratio" in simulated.attrs:
         # what detection told the test's events by, read off the simulation's slips
         summary["edge_threshold"] = float(simulated.attrs["gross_edge_ratio"])

@@ -71,6 +71,7 @@ def compare_inputs(wildcards):
         "events": f"results/{wildcards.test_id}/events.nc",
         "simulated": f"results/{wildcards.test_id}/simulated/recording.nc",
         "steps": f"results/{wildcards.test_id}/simulated/steps.nc",
+        "scatter": f"results/{wildcards.test_id}/simulated/scatter.csv",
         "fit": f"results/{wildcards.test_id}/fit.json",
         "map": "results/map/map.nc",
     }

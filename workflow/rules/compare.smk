@@ -23,6 +23,6 @@ rule compare:
         "../envs/slipwave.yaml"
     shell:
         "slipwave compare {input.events:q} --simulated {input.simulated:q} "
-        "--steps {input.steps:q} --fit {input.fit:q} {params.waves} --map {input.map:q} "
+        "--steps {input.steps:q} --scatter {input.scatter:q} --fit {input.fit:q} {params.waves} --map {input.map:q} "
         "-o {output.table:q} --json {output.summary:q} "
         "--simulated-events {output.simulated_events:q} > {log:q} 2>&1"

@@ -1,12 +1,14 @@
 rule simulate:
     """One test simulated with its fitted law: a recording in the measurement's shape,
-    the zone history and the simulated kymograph."""
+    the zone history and the simulated kymograph; and the law's neighbours, a load
+    cell's calibration apart, for the simulation's own scatter."""
     input:
         "results/{test_id}/fit.json",
     output:
         recording="results/{test_id}/simulated/recording.nc",
         contact="results/{test_id}/simulated/contact.nc",
         steps="results/{test_id}/simulated/steps.nc",
+        scatter="results/{test_id}/simulated/scatter.csv",
     log:
         "results/logs/simulate/{test_id}.log",
     threads: 1
@@ -17,4 +19,5 @@ rule simulate:
         "../envs/slipwave.yaml"
     shell:
         "slipwave simulate --fit {input:q} -o {output.recording:q} "
-        "--contact {output.contact:q} --steps {output.steps:q} > {log:q} 2>&1"
+        "--contact {output.contact:q} --steps {output.steps:q} --scatter {output.scatter:q} "
+        "> {log:q} 2>&1"

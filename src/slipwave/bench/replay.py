@@ -12,17 +12,21 @@ kymograph's readers and the comparison run on both unchanged.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from slipwave.bench.camera import Camera, Photoelastic
-from slipwave.bench.sensors import clean_signals, step_times
+from slipwave.bench.sensors import step_times
 from slipwave.bench.setup import TestSetup
 from slipwave.cache import DiskCache
+from slipwave.compare import ORIGIN, SCATTER_STEP, event_features, first_wave
 from slipwave.defaults import BAND_MM, CONVENTIONS
-from slipwave.fit import WAVE_SPEED_MM_S, detected_edge_threshold
+from slipwave.errors import SlipwaveError
+from slipwave.events import detect_events
+from slipwave.fit import detected_edge_threshold, simulated_recording
 from slipwave.solver import Coulomb, Slab, condense, simulate
 
 STATE_NAMES = "open stick slip"
@@ -82,13 +86,7 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
     slab = spec.slab()
     simulation = simulate(slab, friction, spec.load_path(),
                           condensed=condense(slab, store=DiskCache()))
-    recording = clean_signals(simulation, speed=setup["speed_mm_s"],
-                              loading_time=setup["loading_time_s"],
-                              duration=setup["duration_s"], sample_rate=sample_rate,
-                              wave_speed=WAVE_SPEED_MM_S)
-    if setup.edge_reference == "flat":  # the sensors read the edges against the flat
-        for channel in ("DG", "DD"):
-            recording[channel] = recording[channel] - recording["DT"]
+    recording = simulated_recording(simulation, setup, sample_rate=sample_rate)
     recording.attrs.update({
         "test_id": setup.test_id, "source": f"simulation of {setup.test_id}",
         "sample_rate_hz": sample_rate, "edge_reference": setup.edge_reference,
@@ -101,6 +99,70 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
                        loading_time=setup["loading_time_s"])
     contact = contact_history(simulation, times, spec.slab() if kymograph else None)
     return Replay(simulation, recording, contact)
+
+
+def neighbouring_laws(friction: Coulomb, step: float = SCATTER_STEP) -> list[Coulomb]:
+    """The law with fs, then fd, moved by -``step`` and +``step`` (relative).
+
+    A move that would break fd <= fs is left out.
+
+    Examples
+    --------
+    >>> [(law.fs, law.fd) for law in neighbouring_laws(Coulomb(fs=1.0, fd=0.5), 0.01)]
+    [(0.99, 0.5), (1.01, 0.5), (1.0, 0.495), (1.0, 0.505)]
+    """
+    laws = []
+    for name, value in (("fs", friction.fs), ("fd", friction.dynamic)):
+        for sign in (-1.0, 1.0):
+            try:
+                laws.append(replace(friction, **{name: value * (1.0 + sign * step)}))
+            except SlipwaveError:
+                continue
+    return laws
+
+
+def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
+                     gross_edge_ratio: float, elements: int = 80, sample_rate: float = 100.0,
+                     step: float = SCATTER_STEP) -> pd.DataFrame:
+    """The compared features of the law's neighbouring simulations.
+
+    Under fs > fd a law settles in a cycle of slips that changes by whole slips with
+    coefficients closer than the load cells tell apart: the numbers of slips, their
+    recurrence, the first gross slip's time and the drops' medians scatter about
+    their trend. The law is run at :func:`neighbouring_laws` and each run's events are
+    read as the comparison reads the simulation's, so that
+    :func:`slipwave.compare.compare_test` can hold against the law only what its own
+    scatter does not cover.
+
+    Parameters
+    ----------
+    setup, friction, min_drop, elements, sample_rate
+        As in :func:`replay_test`.
+    gross_edge_ratio
+        The gross/partial edge threshold of the simulation compared (its recording's
+        attrs), used for every neighbour.
+    step
+        How far the coefficients move, relative.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per neighbour: ``fs``, ``fd`` and the values of
+        :data:`slipwave.compare.EVENT_FEATURES` and :data:`slipwave.compare.ORIGIN`.
+
+    """
+    rows = []
+    for law in neighbouring_laws(friction, step):
+        spec = setup.bench_test(law, elements=elements)
+        slab = spec.slab()
+        simulation = simulate(slab, law, spec.load_path(),
+                              condensed=condense(slab, store=DiskCache()))
+        events = detect_events(simulated_recording(simulation, setup, sample_rate=sample_rate),
+                               min_drop=min_drop, edge_convention="x_axis",
+                               gross_edge_ratio=gross_edge_ratio)
+        rows.append({"fs": law.fs, "fd": law.dynamic, **event_features(events),
+                     ORIGIN.name: first_wave(simulation)[0]})
+    return pd.DataFrame(rows)
 
 
 def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None = None
