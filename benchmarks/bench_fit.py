@@ -170,7 +170,9 @@ def slip_weakening() -> None:
     dc = weakening["parameters"]["dc"]["value"]
     print(f"slip-weakening test: chosen {fit['chosen']}, Coulomb delta AIC "
           f"{fit['laws']['coulomb']['delta_aic']:.1f} (rejected "
-          f"{fit['laws']['coulomb']['rejected']}), Dc {dc:.4f} mm (truth 0.1), "
+          f"{fit['laws']['coulomb']['rejected']}), Dc {dc:.4f} mm "
+          f"[{weakening['parameters']['dc']['low']:.4f}, "
+          f"{weakening['parameters']['dc']['high']:.4f}] (truth 0.1), "
           f"fs {weakening['parameters']['fs']['value']:.4f}, "
           f"fd {weakening['parameters']['fd']['value']:.4f}")
     check("Coulomb rejected for slip-weakening", float(fit["laws"]["coulomb"]["rejected"]),

@@ -13,9 +13,11 @@ from slipwave.bench.setup import read_test_setup
 from slipwave.compare import (
     COMPARISON_COLUMNS,
     EVENT_FEATURES,
+    ORIGIN,
     SCATTER_STEP,
     compare_test,
     event_features,
+    first_wave,
     place_on_map,
     verdict_counts,
 )
@@ -124,6 +126,32 @@ def test_a_difference_within_the_law_s_scatter_agrees_and_says_so(test_and_repla
     assert np.allclose(table.loc[others, "tolerance"].astype(float),
                        alone.set_index("feature").loc[others, "tolerance"].astype(float),
                        equal_nan=True)
+
+
+def test_the_first_wave_is_the_first_the_video_could_see(test_and_replay):
+    result, _, replay = test_and_replay
+    simulation = replay.simulation
+    x, order = simulation["x"].values, simulation["cascade_round"].values
+    origin, way = first_wave(simulation)
+    assert way in ("left_to_right", "right_to_left")
+    waves = np.flatnonzero((simulation["phase"].values == "tangential")
+                           & (simulation["wave"].values != "none"))
+    spans = [np.ptp(x[order[k] >= 0]) / np.ptp(x) for k in waves]
+    seen = next(k for k, span in zip(waves, spans, strict=True) if span >= 0.25)
+    assert spans[0] < 0.25 < spans[list(waves).index(seen)]  # an edge's slip comes first
+    assert origin != first_wave(simulation, min_extent=0.0)[0]
+    assert x[order[seen] >= 0].min() <= origin <= x[order[seen] >= 0].max()
+    # a video whose first wave was too fast to tell its origin: not compared, and said
+    measured = detect_events(result.recording,
+                             gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    video = pd.DataFrame({"x_start": [39.0, -30.0], "kind": ["unresolved", "gross"],
+                          "direction": ["unresolved", way], "speed": [np.nan, 200.0]})
+    table = compare_test(measured, replay.recording, simulation, video,
+                         min_drop=0.3).set_index("feature")
+    row = table.loc[ORIGIN.name]
+    assert row["verdict"] == "not compared" and "too fast" in row["note"]
+    assert row["simulated"] == origin
+    assert table.loc["way gross slips sweep (video vs zones)", "verdict"] == "agrees"
 
 
 def test_place_on_map_picks_the_nearest_case():

@@ -14,6 +14,7 @@ from slipwave.cli import main
 from slipwave.errors import SlipwaveError
 from slipwave.fit import (
     RATIO_SIGMA,
+    SLIP_SIGMA,
     SlipFeatures,
     _intervals,
     edge_threshold,
@@ -71,7 +72,8 @@ def test_features_classify_by_edges_and_residuals_vanish_on_themselves(virtual):
     fewer = slip_features(events.iloc[:0], gross_edge_ratio=1.0, min_drop=0.3, duration=90.0,
                           sample_rate=100.0)
     missing = feature_residuals(fewer, features)
-    assert missing[0] == pytest.approx(0.1 / RATIO_SIGMA)  # a gross slip the simulation lacks
+    # a gross slip the simulation lacks
+    assert missing[0] == pytest.approx(0.1 / np.hypot(RATIO_SIGMA, SLIP_SIGMA))
 
 
 def _cycle(count: int, period: float, before: float) -> SlipFeatures:

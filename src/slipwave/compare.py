@@ -21,6 +21,7 @@ import xarray as xr
 
 from slipwave.defaults import LOAD_CALIBRATION
 from slipwave.events.detect import detect_events
+from slipwave.video.waves import MIN_EXTENT
 
 COMPARISON_COLUMNS = ("feature", "unit", "measured", "simulated", "scatter", "difference",
                       "tolerance", "verdict", "note")
@@ -164,29 +165,37 @@ def _row(feature: Feature, measured: float, simulated: float, scatter: float) ->
             "tolerance": allowed, "verdict": verdict, "note": note}
 
 
-def first_wave(simulation: xr.Dataset) -> tuple[float, str]:
-    """Where the first wave of the tangential loading began, and the way gross slips swept.
+def first_wave(simulation: xr.Dataset, *, min_extent: float = MIN_EXTENT
+               ) -> tuple[float, str]:
+    """Where the first wave the video could see began, and the way gross slips swept.
 
     Parameters
     ----------
     simulation
         The solver's steps (:func:`slipwave.solver.simulate`).
+    min_extent
+        The smallest part of the contact a wave's slip must span to count, as the
+        video's tracker (:func:`slipwave.video.track_waves`) asks: the first slips of
+        the tangential loading are a few nodes at an edge, which no video shows.
 
     Returns
     -------
     tuple
-        The first wave's origin along x (mm; NaN without a wave) and the way most
-        gross slips swept (``left_to_right``, ``right_to_left``, or ``""``).
+        The first such wave's origin along x (mm: where its cascade's first tenth of
+        rounds slipped; NaN without one) and the way most gross slips swept
+        (``left_to_right``, ``right_to_left``, or ``""``).
 
     """
     wave = simulation["wave"].values
     tangential = simulation["phase"].values == "tangential"
     order = simulation["cascade_round"].values
     x = simulation["x"].values
-    steps = np.flatnonzero(tangential & (wave != "none"))
-    if not steps.size:
+    length = float(np.ptp(x))
+    seen = [k for k in np.flatnonzero(tangential & (wave != "none"))
+            if np.ptp(x[order[k] >= 0]) >= min_extent * length]
+    if not seen:
         return float("nan"), ""
-    first = order[steps[0]]
+    first = order[seen[0]]
     origin = float(x[(first >= 0) & (first <= np.quantile(first[first >= 0], 0.1))].mean())
     ways = []
     for k in np.flatnonzero(tangential & (wave == "gross")):
@@ -254,8 +263,12 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
     rows = [_row(feature, measured_values[feature.name], simulated_values[feature.name],
                  scatter_of(feature.name)) for feature in EVENT_FEATURES]
     if waves is not None and len(waves):
-        rows.append(_row(ORIGIN, float(waves["x_start"].iloc[0]), origin,
-                         scatter_of(ORIGIN.name)))
+        if waves["kind"].iloc[0] == "unresolved":
+            rows.append(_row(ORIGIN, float("nan"), origin, 0.0) | {
+                "note": "the video's first wave was too fast to tell where it began"})
+        else:
+            rows.append(_row(ORIGIN, float(waves["x_start"].iloc[0]), origin,
+                             scatter_of(ORIGIN.name)))
         seen = waves.loc[waves["kind"] == "gross", "direction"]
         measured_way = seen.mode().iloc[0] if len(seen) else ""
         same = bool(measured_way) and bool(way) and measured_way == way

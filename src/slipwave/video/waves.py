@@ -24,6 +24,10 @@ SMOOTHING = 3
 """Pixels along the band over which :func:`change` averages."""
 
 
+MIN_EXTENT = 0.25
+"""Smallest part of the contact length a wave must sweep to be tracked (:func:`track_waves`)."""
+
+
 def change(kymo: xr.Dataset) -> xr.DataArray:
     """How much the band changed since the previous frame, at each frame and position.
 
@@ -56,7 +60,7 @@ def track_waves(
     threshold: float | None = None,
     min_columns: int = 3,
     max_gap: int = 2,
-    min_extent: float = 0.25,
+    min_extent: float = MIN_EXTENT,
     max_duration: float = 2.0,
     gross_extent: float = 0.95,
     min_frames: int = 3,
