@@ -7,7 +7,9 @@ measurement has, in the measurement's shapes: a recording like
 the edges in the test's edge reference), and the contact's history: the zone state of
 every node at every step and the simulated photoelastic kymograph (the virtual bench's
 camera model, the band the video's kymograph reads), so that detection, the
-kymograph's readers and the comparison run on both unchanged.
+kymograph's readers and the comparison run on both unchanged. :func:`sequence_scatter`
+runs the law's neighbours (fs or fd a load cell's calibration off) for the
+simulation's own scatter, which the comparison's tolerances hold.
 """
 
 from __future__ import annotations
