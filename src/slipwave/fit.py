@@ -405,12 +405,8 @@ def simulated_recording(simulation: xr.Dataset, setup: TestSetup, *,
 
     Parameters
     ----------
-    simulation
-        From :func:`slipwave.solver.simulate` with the test's bench spec.
-    setup
-        The test's setup (speed, normal loading time, duration, edge reference).
-    sample_rate
-        The card's sampling rate, Hz.
+    simulation, setup, sample_rate
+        As in :func:`simulated_events`.
 
     Returns
     -------
