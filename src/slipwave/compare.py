@@ -51,7 +51,19 @@ class Feature:
     floor: float = 0.0
 
     def allowed(self, measured: float) -> float:
-        """The measurement's own tolerance at a measured value."""
+        """The measurement's own tolerance at a measured value.
+
+        Parameters
+        ----------
+        measured
+            The measured value.
+
+        Returns
+        -------
+        float
+            The tolerance (NaN where nothing was measured).
+
+        """
         if not np.isfinite(measured):
             return float("nan")
         return max(self.floor, self.tolerance * abs(measured) if self.relative
@@ -131,7 +143,16 @@ def event_features(events: pd.DataFrame) -> dict[str, float]:
 def spread(values: Sequence[float]) -> float:
     """A feature's standard deviation over neighbouring simulations.
 
-    Non-finite values are left out; fewer than two finite values: 0.
+    Parameters
+    ----------
+    values
+        The feature's values, the simulation's and its neighbours'.
+
+    Returns
+    -------
+    float
+        Their sample standard deviation, non-finite values left out (0 with fewer
+        than two finite ones).
 
     Examples
     --------

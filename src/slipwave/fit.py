@@ -10,7 +10,8 @@ simulations; they are cached by parameters within a fit. The search is derivativ
 (a scan, then Nelder-Mead): the features are piecewise smooth in the parameters (a
 partial slip more or less changes the history), which finite-difference Jacobians do
 not survive. 95 % intervals join the Gauss-Newton covariance of the residuals' secant
-slopes (two runs per parameter, a few partial slips apart) with the region where the
+slopes (two runs per parameter, a few partial slips apart), with the load cells'
+calibration range added in quadrature to each coefficient's, and the region where the
 misfit rises by less than 3.84, both scaled by the reduced misfit when the law does not
 reach the noise; laws are compared by Akaike's criterion (AIC).
 
@@ -879,6 +880,7 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     # The residuals on both sides of the optimum along each parameter, a secant's width
     # apart: the misfit is rough at the scale of one partial slip more or less, so the
     # sensitivity that matters is the trend across several, not the local curvature.
+    # Without the load cells' calibration: it is an error of its own, added below.
     names = LAWS[law]
     centre = np.asarray(theta)
     secant = 2.0 * scale
@@ -889,8 +891,7 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
         for end in ends:
             objective(end)
         if all(end in objective.features for end in ends) and ends[0][k] != ends[1][k]:
-            below, above = (feature_residuals(objective.features[end], objective.measured,
-                                              calibration_error=calibration_error)
+            below, above = (feature_residuals(objective.features[end], objective.measured)
                             for end in ends)
             jacobian.append((above - below) / (ends[1][k] - ends[0][k]))
         else:
@@ -900,6 +901,12 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     # the features a law is judged on: the residuals of the measurement against itself
     features = feature_residuals(objective.measured, objective.measured).size
     low, high, method = _intervals(history, theta, misfit, features)
+    # A scale error common to both load cells multiplies every T/|N|, hence every
+    # coefficient, alike: its 95 % range, independent of the fit's own error.
+    calibration = np.array([abs(value) * 1.96 * np.sqrt(2.0) * calibration_error
+                            if name in _COEFFICIENTS else 0.0
+                            for name, value in zip(names, theta, strict=True)])
+    half = calibration
     if all(column is not None for column in jacobian):
         matrix = np.column_stack(jacobian)
         reduced = max(1.0, misfit / max(1, features - len(theta)))
@@ -908,18 +915,11 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
         except np.linalg.LinAlgError:
             covariance = None
         if covariance is not None and np.all(np.diag(covariance) > 0):
-            half = 1.96 * np.sqrt(np.diag(covariance))
-            low = [min(a, t - h) for a, t, h in zip(low, theta, half, strict=True)]
-            high = [max(b, t + h) for b, t, h in zip(high, theta, half, strict=True)]
+            half = np.hypot(1.96 * np.sqrt(np.diag(covariance)), calibration)
             method = "secant"
-    # A scale error common to both load cells multiplies every T/|N|, hence every
-    # coefficient, alike; the slopes above, dominated by slips appearing and vanishing,
-    # do not see it, so each coefficient's interval holds at least its 95 % range.
-    scale = 1.96 * np.sqrt(2.0) * calibration_error
+    low = [min(a, t - h) for a, t, h in zip(low, theta, half, strict=True)]
+    high = [max(b, t + h) for b, t, h in zip(high, theta, half, strict=True)]
     for k, name in enumerate(names):
-        if name in _COEFFICIENTS:
-            low[k] = min(low[k], theta[k] * (1.0 - scale))
-            high[k] = max(high[k], theta[k] * (1.0 + scale))
         bounds = BOUNDS[name]
         low[k], high[k] = max(low[k], bounds[0]), min(high[k], bounds[1])
     fit = LawFit(law, dict(zip(names, theta, strict=True)), dict(zip(names, low, strict=True)),

@@ -104,22 +104,35 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
 
 
 def neighbouring_laws(friction: Coulomb, step: float = SCATTER_STEP) -> list[Coulomb]:
-    """The law with fs, then fd, moved by -``step`` and +``step`` (relative).
+    """The law with fs, then fd, moved down and up.
 
-    A move that would break fd <= fs is left out.
+    Parameters
+    ----------
+    friction
+        The law.
+    step
+        How far each coefficient moves, relative.
+
+    Returns
+    -------
+    list of Coulomb
+        fs - step, fs + step, then fd - step, fd + step (relative), the rest of the law
+        kept; a move that would break fd <= fs is left out.
 
     Examples
     --------
     >>> [(law.fs, law.fd) for law in neighbouring_laws(Coulomb(fs=1.0, fd=0.5), 0.01)]
     [(0.99, 0.5), (1.01, 0.5), (1.0, 0.495), (1.0, 0.505)]
     """
+    factors = (1.0 - step, 1.0 + step)
+    moves = ([(friction.fs * factor, friction.fd) for factor in factors]
+             + [(friction.fs, friction.dynamic * factor) for factor in factors])
     laws = []
-    for name, value in (("fs", friction.fs), ("fd", friction.dynamic)):
-        for sign in (-1.0, 1.0):
-            try:
-                laws.append(replace(friction, **{name: value * (1.0 + sign * step)}))
-            except SlipwaveError:
-                continue
+    for fs, fd in moves:
+        try:
+            laws.append(replace(friction, fs=fs, fd=fd))
+        except SlipwaveError:  # fd above fs
+            continue
     return laws
 
 
