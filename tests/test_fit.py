@@ -24,6 +24,7 @@ from slipwave.fit import (
     law_of,
     measured_events,
     slip_features,
+    split_edge_ratios,
 )
 from slipwave.io import read_acquisition
 
@@ -110,6 +111,18 @@ def test_first_slip_load_rises_steadily_with_fs(tmp_path):
         firsts.append(features.first_ratio)
     slopes = np.diff(firsts) / 0.05
     assert np.all((slopes > 0.9) & (slopes < 1.6))  # at gross slips: up and down with fs
+
+
+def test_a_partial_slip_moving_the_edges_as_gross_ones_do_sets_no_threshold():
+    """hl025's coarse Coulomb fit: gross slips at DG/DD 1.105, one partial at 1.099."""
+    ratio = np.array([1.105, 1.105, 1.106, 1.099, -1.32, -1.229, -1.199])
+    far = np.array([0.045, 0.045, 0.046, 0.009, 0.022, 0.029, 0.042])
+    gross = np.array([True, True, True, False, False, False, False])
+    # no partial slip below the gross ones that the edges tell: half their median
+    assert split_edge_ratios(ratio, far, gross) == pytest.approx(0.5 * 1.105)
+    # a partial slip that the edges do tell (0.8) sets it halfway
+    ratio[3] = 0.8
+    assert split_edge_ratios(ratio, far, gross) == pytest.approx(np.sqrt(1.105 * 0.8))
 
 
 def test_intervals_from_curvature_match_a_known_quadratic():
