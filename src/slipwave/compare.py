@@ -104,6 +104,24 @@ def _median(events: pd.DataFrame, column: str) -> float:
     return float(np.median(values)) if values.size else float("nan")
 
 
+def recurrence(gross: pd.DataFrame) -> float:
+    """The median interval between gross slips.
+
+    Parameters
+    ----------
+    gross
+        The gross slips' events (``t_start``, s).
+
+    Returns
+    -------
+    float
+        The median interval, s (NaN with fewer than two slips).
+
+    """
+    times = gross["t_start"].to_numpy(dtype=float)
+    return float(np.median(np.diff(times))) if times.size > 1 else float("nan")
+
+
 def event_features(events: pd.DataFrame) -> dict[str, float]:
     """The values of :data:`EVENT_FEATURES` in one recording's events.
 
@@ -134,8 +152,7 @@ def event_features(events: pd.DataFrame) -> dict[str, float]:
     times = gross["t_start"].to_numpy(dtype=float)
     values = [float(len(gross)), float(len(partial)), _median(gross, "ratio_before"),
               _median(gross, "ratio_after"), _median(gross, "drop"), _median(partial, "drop"),
-              float(np.median(np.diff(times))) if times.size > 1 else float("nan"),
-              float(times.min()) if times.size else float("nan"),
+              recurrence(gross), float(times.min()) if times.size else float("nan"),
               _median(gross, "DG_jump"), _median(gross, "DD_jump"), _median(gross, "edge_ratio")]
     return dict(zip((feature.name for feature in EVENT_FEATURES), values, strict=True))
 
@@ -164,11 +181,13 @@ def spread(values: Sequence[float]) -> float:
     return float(np.std(finite, ddof=1)) if finite.size > 1 else 0.0
 
 
-def _row(feature: Feature, measured: float, simulated: float, scatter: float) -> dict[str, Any]:
+def _row(feature: Feature, measured: float, simulated: float, scatter: float,
+         unknown: str = "not measured") -> dict[str, Any]:
     """One feature: the verdict from |simulated - measured| against the tolerance.
 
     The tolerance joins what the measurement allows with twice the simulation's own
-    scatter (``scatter``, a standard deviation), in quadrature.
+    scatter (``scatter``, a standard deviation), in quadrature; ``unknown`` is the note
+    when nothing was measured.
     """
     difference = simulated - measured
     own = feature.allowed(measured)
@@ -176,7 +195,7 @@ def _row(feature: Feature, measured: float, simulated: float, scatter: float) ->
     note = ""
     if not (np.isfinite(measured) and np.isfinite(simulated)):
         verdict = "not compared"
-        note = "not measured" if not np.isfinite(measured) else "not simulated"
+        note = unknown if not np.isfinite(measured) else "not simulated"
     else:
         verdict = "agrees" if abs(difference) <= allowed else "differs"
         if verdict == "agrees" and abs(difference) > own:
@@ -285,8 +304,8 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
                  scatter_of(feature.name)) for feature in EVENT_FEATURES]
     if waves is not None and len(waves):
         if waves["kind"].iloc[0] == "unresolved":
-            rows.append(_row(ORIGIN, float("nan"), origin, 0.0) | {
-                "note": "the video's first wave was too fast to tell where it began"})
+            rows.append(_row(ORIGIN, float("nan"), origin, 0.0, unknown="the video's first "
+                             "wave was too fast to tell where it began"))
         else:
             rows.append(_row(ORIGIN, float(waves["x_start"].iloc[0]), origin,
                              scatter_of(ORIGIN.name)))

@@ -42,6 +42,7 @@ from scipy.optimize import minimize
 from slipwave.bench.sensors import clean_signals, step_times
 from slipwave.bench.setup import TestSetup
 from slipwave.cache import DiskCache
+from slipwave.compare import recurrence
 from slipwave.defaults import FIT_ELEMENTS, FIT_MAX_EVALUATIONS, LOAD_CALIBRATION
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import detect_events
@@ -536,16 +537,16 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
         n = simulated_time.size
         t.append(np.concatenate([simulated_time - measured_time[:n],
                                  measured.duration - measured_time[n:]]))
-    recurrence = _recurrence(measured.gross)
+    measured_recurrence = recurrence(measured.gross)
     counts = [(len(s) - len(measured.gross)) / max(1.0, COUNT_SIGMA * len(measured.gross)),
               (simulated.partial_slips - measured.partial_slips)
               / max(3.0, COUNT_SIGMA * measured.partial_slips)]
-    if np.isfinite(recurrence):
-        simulated_recurrence = _recurrence(s)
+    if np.isfinite(measured_recurrence):
+        simulated_recurrence = recurrence(s)
         if not np.isfinite(simulated_recurrence):
             simulated_recurrence = measured.duration
-        counts.append((simulated_recurrence - recurrence)
-                      / max(TIME_SIGMA_S, COUNT_SIGMA * recurrence))
+        counts.append((simulated_recurrence - measured_recurrence)
+                      / max(TIME_SIGMA_S, COUNT_SIGMA * measured_recurrence))
     # whitened: the first slip's T/|N| has the cycle's scatter on its own
     sigma = np.concatenate([np.full(r.size, RATIO_SIGMA if which < 2 else
                                     np.hypot(RATIO_SIGMA, SEQUENCE_SIGMA))
@@ -564,19 +565,14 @@ def feature_residuals(simulated: SlipFeatures, measured: SlipFeatures, *,
     nuisance = np.linalg.solve(columns.T @ columns + np.diag(spreads**-2.0), -columns.T @ d)
     d = d + columns @ nuisance
     prior = nuisance / spreads
-    timing = np.hypot(TIME_SIGMA_S, recurrence / 2.0 if np.isfinite(recurrence) else 0.0)
+    timing = np.hypot(TIME_SIGMA_S, measured_recurrence / 2.0
+                      if np.isfinite(measured_recurrence) else 0.0)
     return np.concatenate([d, np.concatenate(t) / timing, counts, prior])
 
 
 def _quartiles(values: np.ndarray) -> np.ndarray:
     """The quartiles (25, 50 and 75 %); none of none."""
     return np.quantile(values, [0.25, 0.5, 0.75]) if values.size else np.zeros(0)
-
-
-def _recurrence(gross: pd.DataFrame) -> float:
-    """The median interval between gross slips, s (NaN with fewer than two)."""
-    times = gross["t_start"].to_numpy(dtype=float)
-    return float(np.median(np.diff(times))) if times.size > 1 else float("nan")
 
 
 def law_of(name: str, params: Mapping[str, float]) -> Coulomb:
