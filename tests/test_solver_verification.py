@@ -259,10 +259,49 @@ def test_a_zone_state_met_again_with_other_coefficients_solves_afresh(zones, com
     s_prev = rng.normal(0.0, 1e-3, n)
     control = Control(dx=0.01, N=LOAD / WIDTH, machine=0.0)
     kept = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
-    for mu in (0.6, 0.9, 0.6):
+    for mu in (0.6, 0.9, 0.6, 0.6):
         fresh = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
-        np.testing.assert_array_equal(
+        # (the state met a third time is solved by its affine map: equal to rounding)
+        np.testing.assert_allclose(
             kept.solve_linear(state, np.full(n, mu), s_prev, control)[0],
-            fresh.solve_linear(state, np.full(n, mu), s_prev, control)[0])
+            fresh.solve_linear(state, np.full(n, mu), s_prev, control)[0],
+            rtol=1e-12, atol=1e-15)
     assert len(kept._layouts) == 1 and len(kept._plans) == 2
+    assert sum(plan.operator is not None for plan in kept._plans.values()) == 1
     assert next(iter(kept._layouts.values())).compliance == compliance
+
+
+@pytest.mark.parametrize(("zones", "compliance"), [((0.0, 0.8, 0.2), False),
+                                                   ((0.6, 0.1, 0.3), True)],
+                         ids=["stiffness form", "compliance form"])
+@pytest.mark.parametrize("control", [Control(T=3.0, dy=-0.01, machine=2.0),
+                                     Control(dx=0.01, N=LOAD / WIDTH),
+                                     Control(T=2.0, N=LOAD / WIDTH, machine=1.0)],
+                         ids=["T and approach", "travel and N", "T and N"])
+def test_the_slips_sensitivity_to_the_coefficients_is_their_derivative(zones, compliance,
+                                                                        control):
+    """Slip-weakening's Newton step stands on d(ds)/d(mu): it must be the derivative of
+    the very solution, whichever form solves it and whatever is imposed on the flat."""
+    slab = Slab(height=40.0, elements=20)
+    condensed = condense(slab)
+    body = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
+    n = body.n
+    rng = np.random.default_rng(5)
+    state = rng.choice(np.array([OPEN, STICK, SLIP], dtype=np.int8), size=n, p=zones)
+    state[n // 2] = STICK  # the flat held by at least one stuck node
+    slipping = np.flatnonzero(state == SLIP)
+    mu = np.where(state == SLIP, 0.6 * rng.choice([-1.0, 1.0], size=n), 0.0)
+    s_prev = rng.normal(0.0, 1e-3, n)
+
+    def slips(coefficients):
+        u, dx, _ = body.solve_linear(state, coefficients, s_prev, control)
+        return (u[:n] - dx - s_prev)[slipping], (body.K @ u)[n:]
+
+    ds, pressure = slips(mu)
+    sensitivity = body.slip_sensitivity(state, mu, control, pressure)
+    step = 1e-6
+    numeric = np.column_stack([(slips(mu + step * (np.arange(n) == i))[0] - ds) / step
+                               for i in slipping])
+    assert body._layouts and next(iter(body._layouts.values())).compliance == compliance
+    assert np.abs(numeric).max() > 1e-3  # the coefficients do move the slips
+    np.testing.assert_allclose(sensitivity, numeric, atol=1e-6 * np.abs(numeric).max())

@@ -42,6 +42,11 @@ _MAX_ITERATIONS = 60
 _PREDICTOR = 0.9  # see _iterate
 _WEAKENING_TOLERANCE = 1e-6  # relative change of a wave coefficient that ends the fixed point
 _MAX_WEAKENINGS = 1000
+# Newton steps on the wave's coefficients per cascade round before falling back on the
+# plain fixed point (with Aitken's extrapolation); Newton mostly ends in two or three.
+_NEWTON_WEAKENINGS = 12
+_NEWTON_REACH = 20.0  # the longest Newton step, in plain fixed-point steps
+_SLOPE_STEP = 1e-6  # mm: the central difference of the weakening's slope
 # Factorised zone states kept per body, least recently used dropped first. A stick-slip
 # run revisits few states (about 250 in a 280 s test on 80 elements, against some 4000
 # solves): kept, they spare a factorisation each; bounded by their bytes.
@@ -49,6 +54,9 @@ _PLANS_BYTES = 128 * 2**20
 # Zone states whose layout is kept to factorise again with other coefficients of their
 # slipping nodes: a slip-weakening wave meets one state with some 30 coefficients.
 _LAYOUTS = 32
+# Solves of a zone state after which its affine map is kept: building it costs some ten
+# solves, and a state met three times is mostly met many more (a stick-slip cycle).
+_OPERATOR_USES = 3
 
 
 class NotConverged(Exception):  # noqa: N818 - an internal signal, not an error of the API
@@ -168,6 +176,74 @@ class Body:
             Contact displacements, flat x and flat y positions.
 
         """
+        u, dx, dy, _ = self.solve_state(state, mu, s_prev, control)
+        return u, dx, dy
+
+    def solve_state(
+        self,
+        state: np.ndarray,
+        mu: np.ndarray,
+        s_prev: np.ndarray,
+        control: Control,
+    ) -> tuple[np.ndarray, float, float, np.ndarray]:
+        """:meth:`solve_linear`, with the contact forces ``r = K u`` too.
+
+        A zone state solved a few times before is solved again by its kept affine
+        map (:meth:`_Plan.keep_operator`): in a stick-slip run most solves meet a
+        state seen many times.
+
+        Parameters
+        ----------
+        state, mu, s_prev, control
+            As in :meth:`solve_linear`.
+
+        Returns
+        -------
+        tuple
+            Contact displacements, flat x and y positions, contact forces.
+
+        """
+        plan = self._plan(state, mu, control)
+        plan.uses += 1
+        if plan.uses >= _OPERATOR_USES and plan.operator is None:
+            before = plan.nbytes
+            plan.keep_operator()
+            self._plans_bytes += plan.nbytes - before
+        return plan.solve(s_prev, control)
+
+    def slip_sensitivity(
+        self,
+        state: np.ndarray,
+        mu: np.ndarray,
+        control: Control,
+        pressure: np.ndarray,
+    ) -> np.ndarray:
+        """How the slipping nodes' slips move with their friction coefficients.
+
+        For a fixed zone state the solution is linear in the loads but not in the
+        slipping nodes' coefficients: ``Q_i = mu_i P_i``. Its derivative reuses the
+        state's factorisation (one solve with a right-hand side per slipping node),
+        which gives slip-weakening's fixed point a Newton step.
+
+        Parameters
+        ----------
+        state, mu, control
+            As in :meth:`solve_linear`, whose solution is differentiated.
+        pressure
+            Normal force P of every node in that solution.
+
+        Returns
+        -------
+        numpy.ndarray
+            (m, m) for the m slipping nodes in index order: d(ds_j)/d(mu_i), the
+            change of node j's slip increment ``ux - dx - s_prev`` per unit change
+            of node i's signed coefficient.
+
+        """
+        return self._plan(state, mu, control).slip_sensitivity(pressure)
+
+    def _plan(self, state: np.ndarray, mu: np.ndarray, control: Control) -> _Plan:
+        """The factorised problem of a zone state, kept or made (and then kept)."""
         kinds = (control.dx is None, control.dy is None, control.T is not None,
                  control.N is not None)
         shape = state.tobytes() + bytes(kinds) + np.float64(control.machine).tobytes()
@@ -185,7 +261,7 @@ class Body:
             while self._plans and self._plans_bytes > _PLANS_BYTES:
                 self._plans_bytes -= self._plans.pop(next(iter(self._plans))).nbytes
         self._plans[key] = plan
-        return plan.solve(s_prev, control)
+        return plan
 
     def solve_increment(
         self,
@@ -267,6 +343,7 @@ class Body:
         rounds = 0
         weakenings = 0
         history: list[np.ndarray] = []
+        newtons = 0  # Newton steps in this round
         while True:
             # Nodes outside the wave may slip only without a cascade (fs == fd).
             limit = np.where(in_wave, wave_limit, static)
@@ -276,8 +353,7 @@ class Body:
             for _ in range(_MAX_ITERATIONS):
                 iterations += 1
                 mu = limit * sign
-                u, dx, dy = self.solve_linear(state, mu, s_prev, control)
-                r = self.K @ u
+                u, dx, dy, r = self.solve_state(state, mu, s_prev, control)
                 Q, P = r[:n], r[n:]  # ix and iy are the two halves
                 gap = self.g0 + u[n:] - dy
                 ds = u[:n] - dx - s_prev
@@ -340,7 +416,8 @@ class Body:
             if weakening is not None and in_wave.any():
                 # Slip-weakening: the wave's coefficients at the slip they give. From
                 # fd (the most slip) the slip only shrinks towards the fixed point, the
-                # largest equilibrium the weakening allows.
+                # largest equilibrium the weakening allows; Newton's steps go the same
+                # way, further.
                 slip = np.abs(ds)
                 updated = np.where(in_wave & (state == SLIP), weakening(slip), wave_limit)
                 updated = np.clip(updated, dynamic, static)
@@ -348,6 +425,12 @@ class Body:
                     weakenings += 1
                     if weakenings > _MAX_WEAKENINGS:
                         raise NotConverged("slip-weakening coefficients still changing")
+                    if newtons < _NEWTON_WEAKENINGS:
+                        newtons += 1
+                        wave_limit = self._weakening_newton(
+                            state, mu, control, P, ds, wave_limit, updated, weakening,
+                            dynamic, static)
+                        continue
                     history.append(updated)
                     if len(history) == 3:
                         # Aitken's extrapolation of the slowly converging coefficients
@@ -365,6 +448,8 @@ class Body:
             in_wave |= over
             round_slipped[over] = rounds
             rounds += 1
+            newtons = 0
+            history.clear()
             # The overloaded nodes start slipping the way their load pushes them.
             state[over] = SLIP
             sign[over] = np.sign(Q[over])
@@ -376,6 +461,54 @@ class Body:
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state, direction=direction,
                          round_slipped=round_slipped, iterations=iterations, residual=residual,
                          sign=sign, u_before=u_before, dx_before=dx_before)
+
+    def _weakening_newton(
+        self,
+        state: np.ndarray,
+        mu: np.ndarray,
+        control: Control,
+        P: np.ndarray,
+        ds: np.ndarray,
+        wave_limit: np.ndarray,
+        updated: np.ndarray,
+        weakening: Callable[[np.ndarray], np.ndarray],
+        dynamic: float,
+        static: float,
+    ) -> np.ndarray:
+        """A Newton step towards the wave coefficients m = W(|ds(m)|) of this zone state.
+
+        The plain fixed point (``updated``, m <- W(|ds(m)|)) converges slowly when a
+        node's slip feeds back strongly on its own coefficient (some ten steps per
+        cascade round); Newton's step, from the slip's sensitivity to the
+        coefficients (which reuses the state's factorisation), takes two or three.
+        It is taken only where it extrapolates the plain step (same direction, at
+        most :data:`_NEWTON_REACH` times as far): the plain iteration converges only
+        to equilibria that attract it, the stable ones, and Newton's alone could
+        also find the unstable ones, behind it.
+        """
+        slipping = state == SLIP
+        m = wave_limit[slipping]
+        slip = np.abs(ds[slipping])
+        # the slope of the clipped weakening: zero where it is held at fd or fs
+        ends = [np.clip(weakening(slip + step), dynamic, static)
+                for step in (-_SLOPE_STEP, _SLOPE_STEP)]
+        slope = (ends[1] - ends[0]) / (2 * _SLOPE_STEP)
+        direction = np.sign(ds[slipping])
+        # d|ds_j|/dm_i = sign(ds_j) d(ds_j)/d(mu_i) sign_i, mu = m sign
+        sensitivity = (direction[:, None] * self.slip_sensitivity(state, mu, control, P)
+                       * np.sign(mu[slipping])[None, :])
+        jacobian = np.eye(m.size) - slope[:, None] * sensitivity
+        plain = updated[slipping] - m
+        try:
+            step = np.linalg.solve(jacobian, plain)
+        except np.linalg.LinAlgError:
+            return updated
+        if not (np.isfinite(step).all() and np.all(step * plain >= 0.0)
+                and np.all(np.abs(step) <= _NEWTON_REACH * np.abs(plain) + 1e-12)):
+            return updated
+        result = updated.copy()
+        result[slipping] = np.clip(m + step, dynamic, static)
+        return result
 
     def residual(
         self,
@@ -467,8 +600,7 @@ class Body:
         sliding = Control(dx=dx_floor, dy=control.dy, N=control.N)
         seen: set[bytes] = set()
         for _ in range(_MAX_ITERATIONS):
-            u, dx, dy = self.solve_linear(state, mu, s_prev, sliding)
-            r = self.K @ u
+            u, dx, dy, r = self.solve_state(state, mu, s_prev, sliding)
             gap = self.g0 + u[self.iy] - dy
             new = np.where(r[self.iy] - self.cy * gap > 0, SLIP, OPEN).astype(np.int8)
             if np.array_equal(new, state):
@@ -513,8 +645,9 @@ class _Layout:
         self.stick = state == STICK
         self.slip = state == SLIP
         self.contact = self.stick | self.slip
+        self.n_stick = int(self.stick.sum())
         n_open = body.n - int(self.contact.sum())
-        self.compliance = body.C is not None and int(self.stick.sum()) < n_open
+        self.compliance = body.C is not None and self.n_stick < n_open
         self.stick_x = ix[self.stick]
         self.contact_y = iy[self.contact]
         self.slip_x = ix[self.slip]
@@ -555,7 +688,6 @@ class _Layout:
         C = body.C
         assert C is not None
         self.rows = np.concatenate([ix[self.stick], iy[self.contact]])
-        self.n_stick = int(self.stick.sum())
         C_rows = C.take(self.rows, axis=0)
         self.c_stuck = np.hstack([C_rows.take(ix[self.stick], axis=1),
                                   C_rows.take(iy[self.stick], axis=1)])
@@ -572,6 +704,8 @@ class _Plan:
     def __init__(self, layout: _Layout, mu: np.ndarray) -> None:
         self.layout = layout
         self.mu_slip = mu[layout.slip]
+        self.operator: np.ndarray | None = None  # see keep_operator
+        self.uses = 0
         matrix = self._compliance_matrix() if layout.compliance else self._stiffness_matrix()
         self.size = matrix.shape[0]
         # its layout counted in full: a bound (plans of one layout share it)
@@ -605,10 +739,10 @@ class _Plan:
     def _equations_of(self, u: np.ndarray) -> np.ndarray:
         """The stiffness form's left-hand sides for the displacements ``u``."""
         layout = self.layout
-        force = layout.k_rows @ u  # K @ u at the rows the equations read
+        force = layout.k_rows @ u  # K @ u at the rows the equations read (u: columns)
         rows = force[: layout.rows.size]
-        rows[layout.first_slip_row :] -= self.mu_slip * force[layout.rows.size :]
-        return np.concatenate([rows, [total @ u for total in layout.extra_rows]])
+        rows[layout.first_slip_row :] -= self.mu_slip[:, None] * force[layout.rows.size :]
+        return np.vstack([rows, *(total @ u for total in layout.extra_rows)])
 
     def _compliance_matrix(self) -> np.ndarray:
         layout = self.layout
@@ -634,50 +768,133 @@ class _Plan:
 
     def _solve(self, b: np.ndarray) -> np.ndarray:
         if self.size == 0:
-            return np.zeros(0)
+            return np.zeros(b.shape)
         z, info = dgetrs(self.lu, self.piv, b)
         if info != 0 or not np.isfinite(z).all():
             raise NotConverged("singular zone state")
         return np.asarray(z)
 
-    def solve(self, s_prev: np.ndarray, control: Control) -> tuple[np.ndarray, float, float]:
-        """Displacements, dx and dy for this zone state and these loads."""
+    def slip_sensitivity(self, pressure: np.ndarray) -> np.ndarray:
+        """d(ds_j)/d(mu_i) between the slipping nodes (:meth:`Body.slip_sensitivity`)."""
         layout = self.layout
         body = layout.body
-        totals = [v for v, given in ((control.T, layout.T_given), (control.N, layout.N_given))
-                  if given]
+        slipping = layout.slip_x
+        m = slipping.size
+        p = pressure[slipping]
+        # Differentiating Q_i = mu_i P_i leaves the state's own matrix, with P_i as the
+        # source of node i's friction equation: one column per slipping node.
         if layout.compliance:
-            b = np.concatenate([s_prev[layout.stick], -body.g0[layout.contact]])
-            if control.dx is not None:
-                b += control.dx * layout.row_along_x
-            if control.dy is not None:
-                b += control.dy * layout.row_along_y
-            z = self._solve(np.concatenate([b, totals]))
-            n_stick, n_slip = layout.n_stick, self.mu_slip.size
-            r = np.zeros(2 * body.n)
+            n_stick = layout.n_stick
+            rhs = np.zeros((self.size, m))
+            rhs[: layout.rows.size] = -layout.c_slip_x * p
+            if layout.T_given:
+                rhs[layout.rows.size] = -p
+            dz = self._solve(rhs) if m else rhs
+            dr = np.zeros((2 * body.n, m))
+            dr[layout.stick_x] = dz[:n_stick]
+            dr[layout.stick_x + body.n] = dz[n_stick : 2 * n_stick]
+            dr[layout.slip_y] = dz[2 * n_stick : 2 * n_stick + m]
+            dr[layout.slip_x] = self.mu_slip[:, None] * dr[layout.slip_y] + np.diag(p)
+            assert body.C is not None
+            du_x = body.C[slipping] @ dr
+            k = 2 * n_stick + m
+        else:
+            rhs = np.zeros((self.size, m))
+            rhs[layout.first_slip_row + np.arange(m), np.arange(m)] = p
+            dz = self._solve(rhs) if m else rhs
+            k = layout.unknown.size
+            du = np.zeros((2 * body.n, m))
+            du[layout.unknown] = dz[:k]  # a slipping node's ux is an unknown
+            du_x = du[slipping]
+        if layout.dx_unknown:
+            du_x = du_x - dz[k]  # ds = ux - dx - s_prev
+        return du_x
+
+    def inputs(self, s_prev: np.ndarray, control: Control) -> np.ndarray:
+        """The inputs a solve of this state is affine in.
+
+        1, the stuck nodes' s_prev, then what this state's kind prescribes of dx,
+        dy, T and N, in that order.
+        """
+        layout = self.layout
+        given = [value for value in (control.dx, control.dy, control.T, control.N)
+                 if value is not None]
+        return np.concatenate([[1.0], s_prev[layout.stick], given])
+
+    def keep_operator(self) -> None:
+        """Keep the solution as an affine map of :meth:`inputs`.
+
+        A zone state met again is then solved by two products with the map, not by
+        the factorisation's substitutions and the assembly around them.
+        """
+        layout = self.layout
+        n_stick = layout.n_stick
+        n_given = (int(not layout.dx_unknown) + int(not layout.dy_unknown)
+                   + int(layout.T_given) + int(layout.N_given))
+        inputs = np.eye(1 + n_stick + n_given)
+        inputs[0] = 1.0  # every column carries the constant; unit inputs added to it
+        u, dx, dy, r = self.solve_batch(inputs)
+        solution = np.vstack([u, dx, dy, r])
+        solution[:, 1:] -= solution[:, :1]
+        self.operator = solution
+        self.nbytes += solution.nbytes
+
+    def solve(self, s_prev: np.ndarray, control: Control
+              ) -> tuple[np.ndarray, float, float, np.ndarray]:
+        """Displacements, dx, dy and the contact forces for this state and these loads."""
+        v = self.inputs(s_prev, control)
+        if self.operator is not None:
+            y = self.operator @ v
+            n2 = 2 * self.layout.body.n
+            return y[:n2], float(y[n2]), float(y[n2 + 1]), y[n2 + 2:]
+        u, dx, dy, r = self.solve_batch(v[:, None])
+        return u[:, 0], float(dx[0]), float(dy[0]), r[:, 0]
+
+    def solve_batch(self, inputs: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """u, dx, dy and r = K u for columns of :meth:`inputs`."""
+        layout = self.layout
+        body = layout.body
+        count = inputs.shape[1]
+        n_stick = layout.n_stick
+        stuck = inputs[1 : 1 + n_stick]
+        given = iter(inputs[1 + n_stick :])
+        dx = None if layout.dx_unknown else next(given)
+        dy = None if layout.dy_unknown else next(given)
+        totals = list(given)
+        if layout.compliance:
+            b = np.vstack([stuck, -body.g0[layout.contact][:, None] * inputs[:1]])
+            if dx is not None:
+                b += layout.row_along_x[:, None] * dx
+            if dy is not None:
+                b += layout.row_along_y[:, None] * dy
+            z = self._solve(np.vstack([b, *totals]) if totals else b)
+            n_slip = self.mu_slip.size
+            r = np.zeros((2 * body.n, count))
             r[layout.stick_x] = z[:n_stick]
             r[layout.stick_x + body.n] = z[n_stick : 2 * n_stick]
             r[layout.slip_y] = z[2 * n_stick : 2 * n_stick + n_slip]
-            r[layout.slip_x] = self.mu_slip * r[layout.slip_y]
+            r[layout.slip_x] = self.mu_slip[:, None] * r[layout.slip_y]
             k = 2 * n_stick + n_slip
-            dx = control.dx if control.dx is not None else float(z[k])
-            dy = control.dy if control.dy is not None else float(z[-1])
+            dx = z[k] if dx is None else dx
+            dy = z[-1] if dy is None else dy
             assert body.C is not None
-            return body.C @ r, dx, dy
-        base = np.zeros(2 * body.n)
-        base[layout.stick_x] = s_prev[layout.stick]
-        base[layout.contact_y] = -body.g0[layout.contact]
-        b = np.zeros(self.size) if self.size else np.zeros(0)
-        b[len(b) - len(totals):] = totals
+            return body.C @ r, dx, dy, r
+        base = np.zeros((2 * body.n, count))
+        base[layout.stick_x] = stuck
+        base[layout.contact_y] = -body.g0[layout.contact][:, None] * inputs[:1]
+        b = np.zeros((self.size, count))
+        if totals:
+            b[self.size - len(totals):] = totals
         b -= self._equations_of(base)
-        if control.dx is not None:
-            b -= control.dx * self.flat_x
-        if control.dy is not None:
-            b -= control.dy * self.flat_y
+        if dx is not None:
+            b -= self.flat_x[:, None] * dx
+        if dy is not None:
+            b -= self.flat_y[:, None] * dy
         z = self._solve(b)
         k = layout.unknown.size
-        dx = control.dx if control.dx is not None else float(z[k])
-        dy = control.dy if control.dy is not None else float(z[-1])
-        u = base + dx * layout.along_x + dy * layout.along_y
+        dx = z[k] if dx is None else dx
+        dy = z[-1] if dy is None else dy
+        u = base + layout.along_x[:, None] * dx + layout.along_y[:, None] * dy
         u[layout.unknown] = z[:k]
-        return u, dx, dy
+        return u, dx, dy, body.K @ u
