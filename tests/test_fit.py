@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -13,6 +14,7 @@ from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
 from slipwave.fit import (
+    PARTIAL_DROP_SIGMA,
     RATIO_SIGMA,
     SLIP_SIGMA,
     SlipFeatures,
@@ -95,6 +97,24 @@ def test_a_cycle_a_little_off_costs_once_not_per_slip():
     # (0.4 sigma each), and the first slip on time; slip by slip it would be hundreds
     longer = feature_residuals(_cycle(36, 6.6, 0.70), measured)
     assert float(np.sum(longer**2)) == pytest.approx(2 * 0.4**2, rel=0.05)
+
+
+def test_the_partial_slips_size_is_a_feature_as_uncertain_as_the_sequence_makes_it():
+    """Partial slips twice as large cost (1 / PARTIAL_DROP_SIGMA)^2 (the measured
+    median's own error is small beside it); none costs by their number alone."""
+    measured = replace(_cycle(40, 6.0, 0.70), partial_slips=10,
+                       partial_drops=np.linspace(1.9, 2.1, 10))
+    same = feature_residuals(measured, measured)
+    assert same.size == feature_residuals(_cycle(40, 6.0, 0.70), measured).size
+    larger = feature_residuals(replace(measured, partial_drops=2.0 * measured.partial_drops),
+                               measured)
+    assert float(np.sum(larger**2)) == pytest.approx(PARTIAL_DROP_SIGMA**-2, rel=0.05)
+    none = feature_residuals(replace(measured, partial_slips=0, partial_drops=np.zeros(0)),
+                             measured)
+    assert float(np.sum(none**2)) == pytest.approx((10 / 3) ** 2)  # the count's, 10 off 3
+    # too few measured partial slips for a median: no such feature
+    two = replace(measured, partial_slips=2, partial_drops=np.array([1.0, 3.0]))
+    assert feature_residuals(two, two).size == same.size - 1
 
 
 def test_first_slip_load_rises_steadily_with_fs(tmp_path):

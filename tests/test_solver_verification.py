@@ -305,3 +305,36 @@ def test_the_slips_sensitivity_to_the_coefficients_is_their_derivative(zones, co
     assert body._layouts and next(iter(body._layouts.values())).compliance == compliance
     assert np.abs(numeric).max() > 1e-3  # the coefficients do move the slips
     np.testing.assert_allclose(sensitivity, numeric, atol=1e-6 * np.abs(numeric).max())
+
+
+@pytest.mark.parametrize(("zones", "compliance"), [((0.0, 0.8, 0.2), False),
+                                                   ((0.6, 0.1, 0.3), True)],
+                         ids=["stiffness form", "compliance form"])
+@pytest.mark.parametrize("kind", ["T and approach", "travel and N", "T and N"])
+def test_a_state_met_again_is_solved_by_its_affine_map_as_afresh(zones, compliance, kind):
+    """After a few solves a zone state is solved by its kept affine map: for other
+    previous positions and other loads it must give what a fresh factorisation gives
+    (on a crowned slab, whose initial gaps are the map's constant)."""
+    slab = Slab(height=40.0, elements=20, profile=lambda x: 1e-4 * (x / 40.0) ** 2)
+    condensed = condense(slab)
+    n = slab.initial_gap().size
+    rng = np.random.default_rng(11)
+    state = rng.choice(np.array([OPEN, STICK, SLIP], dtype=np.int8), size=n, p=zones)
+    state[n // 2] = STICK
+    mu = np.where(state == SLIP, 0.7 * rng.choice([-1.0, 1.0], size=n), 0.0)
+
+    def control(scale):
+        return {"T and approach": Control(T=3.0 * scale, dy=-0.01 * scale, machine=2.0),
+                "travel and N": Control(dx=0.01 * scale, N=LOAD / WIDTH * scale),
+                "T and N": Control(T=2.0 * scale, N=LOAD / WIDTH, machine=1.0)}[kind]
+
+    kept = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
+    for k in range(5):
+        s_prev, loads = rng.normal(0.0, 1e-3, n), control(1.0 + 0.3 * k)
+        fresh = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
+        for got, expected in zip(kept.solve_state(state, mu, s_prev, loads),
+                                 fresh.solve_state(state, mu, s_prev, loads), strict=True):
+            np.testing.assert_allclose(got, expected, rtol=1e-9,
+                                       atol=1e-12 * np.max(np.abs(expected)))
+    plan = next(iter(kept._plans.values()))
+    assert plan.operator is not None and plan.layout.compliance == compliance
