@@ -23,6 +23,7 @@ from slipwave.fit import (
     feature_residuals,
     fit_test,
     fits_table,
+    law_misfit,
     law_of,
     measured_events,
     slip_features,
@@ -183,6 +184,15 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     table = fits_table([fit])
     assert table.loc[0, "law"] == "coulomb" and table.loc[0, "height_ratio"] == 0.5
     assert TestSetup.from_dict(fit["setup"]).to_dict() == fit["setup"]
+    # one law's misfit on its own: the fit's at its optimum, and far worse off it
+    events = measured_events(recording)
+    fitted = {name: value["value"] for name, value in law.items()}
+    misfit = law_misfit(setup, events, "coulomb", fitted, threshold=fit["edge_threshold"],
+                        elements=80)
+    assert misfit == pytest.approx(fit["laws"]["coulomb"]["misfit"], rel=1e-3, abs=1e-3)
+    off = law_misfit(setup, events, "coulomb", {**fitted, "fs": fitted["fs"] + 0.2},
+                     threshold=fit["edge_threshold"], elements=80)
+    assert off > misfit + 10.0
 
 
 @pytest.mark.parametrize("law", ["run-in", "slip-weakening"])

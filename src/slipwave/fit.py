@@ -772,6 +772,33 @@ class _Objective:
         return self.cache[key]
 
 
+def law_misfit(setup: TestSetup, measured: pd.DataFrame, law: str,
+               params: Mapping[str, float], *, threshold: float,
+               elements: int = FIT_ELEMENTS,
+               calibration_error: float = LOAD_CALIBRATION) -> float:
+    """The misfit the fit gives one law's parameters on one test (one simulation).
+
+    To tell, where a fit misses a known truth, a search that stopped short (the truth's
+    misfit below the fit's) from features the truth does not reproduce (above).
+
+    Parameters
+    ----------
+    setup, measured, law, threshold, elements, calibration_error
+        As for :func:`fit_law`.
+    params
+        The law's parameters by name (:data:`LAWS`).
+
+    Returns
+    -------
+    float
+        The sum of the squared residuals (:func:`feature_residuals`); inf where the
+        solver cannot follow the law.
+
+    """
+    objective = _Objective(setup, measured, law, elements, threshold, calibration_error)
+    return objective(tuple(float(params[name]) for name in LAWS[law]))
+
+
 def _fd_start(measured: pd.DataFrame) -> float:
     """T/|N| after the largest quarter of the drops: the dynamic coefficient's start."""
     largest = measured["drop"] >= measured["drop"].quantile(0.75)
