@@ -112,11 +112,11 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str],
     # the test against its true law's simulation: what the comparison asks even of the
     # truth (the model's own sequence of slips, from the setup measured on the files)
     true_name = "coulomb" if truth["fs_final"] is None else "run-in"
-    true_law = law_of(true_name, {name: truth[name] for name in LAWS[true_name]})
-    truth_table, *_ = replay_and_compare(setup, recording, true_law, min_drop)
+    true_params = {name: truth[name] for name in LAWS[true_name]}
+    truth_table, *_ = replay_and_compare(setup, recording, law_of(true_name, true_params),
+                                         min_drop)
     # where a fit misses, is it the search (the truth's misfit below the fit's) or the
     # setup measured on the files (the truth fits once given the bench's own setup)?
-    true_params = {name: truth[name] for name in LAWS[true_name]}
     true_setup = read_test_setup(recording, {
         "test_id": spec.test_id, **CELLS, "normal_load_n": str(spec.normal_load),
         "speed_mm_s": str(spec.speed), "machine_stiffness_n_mm": str(spec.machine_stiffness)})

@@ -172,8 +172,8 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     _, csv = virtual
     recording = read_acquisition(csv)
     setup = read_test_setup(recording, {"test_id": "v", **CELLS})
-    fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=80,
-                   max_evaluations=12)
+    events = measured_events(recording)
+    fit = fit_test(setup, events, laws=["coulomb"], elements=80, max_evaluations=12)
     law = fit["laws"]["coulomb"]["parameters"]
     for name, truth in TRUTH.items():
         assert law[name]["value"] == pytest.approx(truth, rel=0.02)
@@ -185,7 +185,6 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     assert table.loc[0, "law"] == "coulomb" and table.loc[0, "height_ratio"] == 0.5
     assert TestSetup.from_dict(fit["setup"]).to_dict() == fit["setup"]
     # one law's misfit on its own: the fit's at its optimum, and far worse off it
-    events = measured_events(recording)
     fitted = {name: value["value"] for name, value in law.items()}
     misfit = law_misfit(setup, events, "coulomb", fitted, threshold=fit["edge_threshold"],
                         elements=80)
