@@ -13,9 +13,11 @@
    (N, drive speed, machine stiffness, which the fit measures through the sensors'
    calibration errors): where the truth's misfit is below the fit's, the search
    stopped short; where only the true setup brings it down, the features hinge on
-   sub-percent setup errors.
+   sub-percent setup errors. The truth's misfit on its own setup with its coefficients
+   0.2 % lower and higher measures how rough the misfit is where it is best.
 2. Slip-weakening: one test generated with fs 1.0, fd 0.6, Dc 0.1 mm; Coulomb must be
-   rejected by AIC in favour of slip-weakening, and Dc recovered within 10 %.
+   rejected by AIC in favour of slip-weakening, and Dc recovered within 10 %; the
+   misfits of the truth, and of its Dc 10 % off, are printed.
 3. Speed: simulate + fit + compare of one 280 s test (hl050's geometry) on one core,
    target <= 60 s; the split is printed.
 
@@ -54,6 +56,9 @@ from targets import check, finish
 ROOT = Path(__file__).parents[1]
 CELLS = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
 ELEMENTS = 80
+COEFFICIENTS = ("fs", "fd", "fs_final")
+NEARBY = (0.998, 1.002)
+"""The truth's friction coefficients scaled by these, to measure the misfit's roughness."""
 
 
 def hidden_tests(count: int, seed: int = 2026) -> list[tuple[dict[str, Any], int]]:
@@ -111,7 +116,8 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str],
                                                       min_drop)
     # the test against its true law's simulation: what the comparison asks even of the
     # truth (the model's own sequence of slips, from the setup measured on the files)
-    true_name = "coulomb" if truth["fs_final"] is None else "run-in"
+    true_name = ("slip-weakening" if truth.get("dc") else
+                 "coulomb" if truth["fs_final"] is None else "run-in")
     true_params = {name: truth[name] for name in LAWS[true_name]}
     truth_table, *_ = replay_and_compare(setup, recording, law_of(true_name, true_params),
                                          min_drop)
@@ -124,6 +130,20 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str],
     for name, used in (("truth", setup), ("truth, true setup", true_setup)):
         misfits[name] = law_misfit(used, events, true_name, true_params,
                                    threshold=fit["edge_threshold"], elements=ELEMENTS)
+    # how rough the misfit is where it is best: the truth on its own setup, its friction
+    # coefficients 0.2 % lower and higher (less than the load cells tell apart)
+    for scale in NEARBY:
+        nearby = {name: value * scale if name in COEFFICIENTS else value
+                  for name, value in true_params.items()}
+        misfits[f"truth x{scale:g}, true setup"] = law_misfit(
+            true_setup, events, true_name, nearby, threshold=fit["edge_threshold"],
+            elements=ELEMENTS)
+    if true_name == "slip-weakening":
+        # does the misfit tell Dc 10 % off, the target, from the truth?
+        for scale in (0.9, 1.1):
+            misfits[f"truth, Dc x{scale:g}, true setup"] = law_misfit(
+                true_setup, events, true_name, {**true_params, "dc": truth["dc"] * scale},
+                threshold=fit["edge_threshold"], elements=ELEMENTS)
     result = {"truth": truth, "seed": seed,
               "fit": {k: v for k, v in fit.items() if k != "setup"},
               "verdicts": verdict_counts(table), "differs": differing(table),
@@ -139,6 +159,12 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str],
         result["also"] = {"law": also, "verdicts": verdict_counts(also_table),
                           "differs": differing(also_table)}
     return result
+
+
+def nearby_misfits(result: dict[str, Any]) -> str:
+    """The truth's misfits on its own setup with its coefficients scaled by NEARBY."""
+    return ", ".join(f"{result['misfits'][f'truth x{scale:g}, true setup']:.1f}"
+                     for scale in NEARBY)
 
 
 def recovery(count: int, jobs: int) -> None:
@@ -168,6 +194,7 @@ def recovery(count: int, jobs: int) -> None:
               f"the true law's {result['truth_differs']}; misfit fit "
               f"{result['misfits']['fit']:.1f}, truth {result['misfits']['truth']:.1f}, "
               f"truth on the true setup {result['misfits']['truth, true setup']:.1f} "
+              f"(coefficients x0.998, x1.002: {nearby_misfits(result)}) "
               f"(measured N {result['setup']['normal_load_n']:.2f}, v "
               f"{result['setup']['speed_mm_s']:.5f}, k "
               f"{result['setup']['machine_stiffness_n_mm']:.2f}); "
@@ -197,6 +224,12 @@ def slip_weakening() -> None:
           f"{weakening['parameters']['dc']['high']:.4f}] (truth 0.1), "
           f"fs {weakening['parameters']['fs']['value']:.4f}, "
           f"fd {weakening['parameters']['fd']['value']:.4f}")
+    misfits = result["misfits"]
+    print(f"misfit: fit {misfits['fit']:.2f}, truth {misfits['truth']:.2f}, truth on the "
+          f"true setup {misfits['truth, true setup']:.2f} (coefficients x0.998, x1.002: "
+          f"{nearby_misfits(result)}; Dc x0.9, x1.1: "
+          f"{misfits['truth, Dc x0.9, true setup']:.2f}, "
+          f"{misfits['truth, Dc x1.1, true setup']:.2f})")
     check("Coulomb rejected for slip-weakening", float(fit["laws"]["coulomb"]["rejected"]),
           1.0, at_least=True)
     print(f"Dc within 10 %: {check('Dc within 10 %', abs(dc / 0.1 - 1), 0.10, at_least=False)}")

@@ -16,6 +16,7 @@ from slipwave.errors import SlipwaveError
 from slipwave.fit import (
     PARTIAL_DROP_SIGMA,
     RATIO_SIGMA,
+    ROUGHNESS_STEP,
     SLIP_SIGMA,
     SlipFeatures,
     _intervals,
@@ -146,11 +147,16 @@ def test_a_partial_slip_moving_the_edges_as_gross_ones_do_sets_no_threshold():
     assert split_edge_ratios(ratio, far, gross) == pytest.approx(np.sqrt(1.105 * 0.8))
 
 
-def test_intervals_from_curvature_match_a_known_quadratic():
+def _quadratic_history() -> list[tuple[tuple[float, ...], float]]:
+    """80 evaluations of a misfit 20 + ((fs - 1) / 0.01)^2 + ((fd - 0.6) / 0.002)^2."""
     rng = np.random.default_rng(0)
     points = rng.uniform(-1, 1, (80, 2)) * [0.03, 0.006] + [1.0, 0.6]
     misfit = ((points[:, 0] - 1.0) / 0.01) ** 2 + ((points[:, 1] - 0.6) / 0.002) ** 2 + 20.0
-    history = [(tuple(p), float(m)) for p, m in zip(points, misfit, strict=True)]
+    return [(tuple(p), float(m)) for p, m in zip(points, misfit, strict=True)]
+
+
+def test_intervals_from_curvature_match_a_known_quadratic():
+    history = _quadratic_history()
     low, high, method = _intervals(history, (1.0, 0.6), 20.0, 40)
     assert low[0] < 1.0 < high[0]
     assert method == "curvature"
@@ -158,6 +164,18 @@ def test_intervals_from_curvature_match_a_known_quadratic():
     # (the likelihood-ratio region of the evaluations agrees, to their spacing)
     assert high[0] - 1.0 == pytest.approx(1.96 * 0.01, rel=0.03)
     assert high[1] - 0.6 == pytest.approx(1.96 * 0.002, rel=0.03)
+
+
+def test_intervals_widen_with_the_laws_mismatch_not_its_luckiest_misfit():
+    history = _quadratic_history()
+    low, high, _ = _intervals(history, (1.0, 0.6), 20.0, 40)
+    # neighbours four times the degrees of freedom: every half-width twice as wide
+    wide_low, wide_high, _ = _intervals(history, (1.0, 0.6), 20.0, 40, mismatch=4 * 38.0)
+    for k, centre in enumerate((1.0, 0.6)):
+        assert wide_high[k] - centre == pytest.approx(2 * (high[k] - centre), rel=0.05)
+        assert centre - wide_low[k] == pytest.approx(2 * (centre - low[k]), rel=0.05)
+    # a mismatch within the noise changes nothing
+    assert _intervals(history, (1.0, 0.6), 20.0, 40, mismatch=30.0)[:2] == (low, high)
 
 
 def test_law_of_names_unknown_laws():
@@ -192,6 +210,12 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     off = law_misfit(setup, events, "coulomb", {**fitted, "fs": fitted["fs"] + 0.2},
                      threshold=fit["edge_threshold"], elements=80)
     assert off > misfit + 10.0
+    # the optimum's neighbours, its coefficients 0.2 % lower and higher, as reported
+    nearby = [law_misfit(setup, events, "coulomb",
+                         {name: value * scale for name, value in fitted.items()},
+                         threshold=fit["edge_threshold"], elements=80)
+              for scale in (1 - ROUGHNESS_STEP, 1 + ROUGHNESS_STEP)]
+    assert fit["laws"]["coulomb"]["misfit_nearby"] == pytest.approx(nearby, rel=1e-3, abs=1e-3)
 
 
 @pytest.mark.parametrize("law", ["run-in", "slip-weakening"])

@@ -192,3 +192,28 @@ def test_pdfs_have_their_pages_sections_and_figures(built, name, sections, least
         flat = " ".join(text.split())
         for feature in comparison["feature"]:
             assert " ".join(feature.split()[:3]) in flat, feature
+
+
+def test_figure_workers_die_quietly_when_the_pool_stops_them(capfd):
+    # The command line turns SIGTERM into KeyboardInterrupt (outputs unwind whole); the
+    # forked figure workers inherited it, so the pool's own SIGTERM at its end made them
+    # unwind inside the task queue's lock, which once left a report waiting for ever.
+    import signal
+
+    from matplotlib.figure import Figure
+
+    from slipwave.cli import _terminate
+    from slipwave.plot import figures_png
+
+    figures = []
+    for _ in range(3):
+        figure = Figure(figsize=(1, 1))
+        figure.add_subplot().plot([0, 1])
+        figures.append(figure)
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        for _ in range(40):  # about one pool in five printed a worker's traceback
+            assert len(figures_png(figures, workers=2, dpi=20)) == 3
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert "KeyboardInterrupt" not in capfd.readouterr().err

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 import multiprocessing
+import signal
 from collections.abc import Iterable, Sequence
 
 import numpy as np
@@ -134,6 +135,14 @@ _PENDING: tuple[Sequence[Figure], int] = ((), 110)
 """The figures :func:`figures_png` hands to its forked workers (they inherit it)."""
 
 
+def _worker_start() -> None:
+    # A forked worker inherits the command line's SIGTERM handler, which unwinds like
+    # Ctrl-C; the pool stops its workers with SIGTERM, and a worker unwinding inside
+    # the task queue's lock could leave it held, and the next worker and the report
+    # waiting for ever. A worker simply dies on SIGTERM.
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _render_pending(index: int) -> bytes:
     figures, dpi = _PENDING
     return figure_png(figures[index], dpi=dpi)
@@ -176,7 +185,7 @@ def figures_png(figures: Sequence[Figure], *, workers: int = 1, dpi: int = 110) 
     global _PENDING
     _PENDING = (figures, dpi)
     try:
-        with multiprocessing.get_context("fork").Pool(workers) as pool:
+        with multiprocessing.get_context("fork").Pool(workers, _worker_start) as pool:
             return pool.map(_render_pending, range(len(figures)), chunksize=1)
     finally:
         _PENDING = ((), dpi)

@@ -295,7 +295,8 @@ def pairing_summary(
                                for name, value in entry["parameters"].items()],
                 "misfit": entry["misfit"], "features": entry["features"],
                 "aic": entry["aic"], "delta_aic": entry["delta_aic"],
-                "evaluations": entry["evaluations"], "method": entry["interval_method"]})
+                "evaluations": entry["evaluations"], "method": entry["interval_method"],
+                "nearby": entry.get("misfit_nearby")})
     if comparison is None:
         missing.append("no comparison: the test was not compared with a simulation")
     else:
