@@ -19,6 +19,7 @@ from slipwave.fit import (
     ROUGHNESS_STEP,
     SLIP_SIGMA,
     SlipFeatures,
+    _first_slip_match,
     _intervals,
     edge_threshold,
     feature_residuals,
@@ -133,6 +134,40 @@ def test_first_slip_load_rises_steadily_with_fs(tmp_path):
         firsts.append(features.first_ratio)
     slopes = np.diff(firsts) / 0.05
     assert np.all((slopes > 0.9) & (slopes < 1.6))  # at gross slips: up and down with fs
+
+
+class _FirstSlipObjective:
+    """A stand-in for the fit's objective: the first slip at T/|N| 0.1 + 0.6 fs + 0.5 Dc."""
+
+    def __init__(self, target: float):
+        self.measured = SlipFeatures(pd.DataFrame(), 0, 0.3, 90.0, 100.0,
+                                     first_time=10.0, first_ratio=target)
+        self.features: dict[tuple[float, ...], SlipFeatures] = {}
+        self.cache: dict[tuple[float, ...], float] = {}
+
+    def clip(self, theta):
+        return tuple(round(float(value), 6) for value in theta)
+
+    def __call__(self, theta):
+        key = self.clip(theta)
+        first = 0.1 + 0.6 * key[0] + 0.5 * key[2]
+        self.features[key] = replace(self.measured, first_ratio=first)
+        self.cache[key] = ((first - self.measured.first_ratio) / 0.01) ** 2
+        return self.cache[key]
+
+
+def test_a_weakening_start_moves_fs_until_its_first_slip_comes_at_the_tests():
+    # the truth: fs 0.9 at Dc 0.1; Coulomb's fs, 1.1, reads it high
+    objective = _FirstSlipObjective(target=0.1 + 0.6 * 0.9 + 0.5 * 0.1)
+    start = _first_slip_match(objective, (1.1, 0.6, 0.1))
+    # first step at the nominal slope (1.2, twice the true one) halfway, then the
+    # secant of the two runs all the way
+    assert [theta[0] for theta in objective.cache] == pytest.approx([1.1, 1.0, 0.9])
+    assert start == pytest.approx((0.9, 0.6, 0.1))
+    # without a measured first slip there is nothing to match: the start as given
+    blind = _FirstSlipObjective(target=float("nan"))
+    assert _first_slip_match(blind, (1.1, 0.6, 0.1)) == (1.1, 0.6, 0.1)
+    assert len(blind.cache) == 1
 
 
 def test_a_partial_slip_moving_the_edges_as_gross_ones_do_sets_no_threshold():
