@@ -185,6 +185,28 @@ def test_8_sigterm_during_a_write_leaves_nothing(tmp_path):
     assert list(out.iterdir()) == []
 
 
+def test_8_c_an_interrupt_just_after_the_part_is_created_leaves_nothing(tmp_path,
+                                                                         monkeypatch):
+    """SIGTERM (as KeyboardInterrupt) between the part file's creation and its use.
+
+    CI once caught test 8's signal there: the command said nothing half-written was
+    kept, and the part file stayed.
+    """
+    import os
+
+    real_close = os.close
+
+    def interrupted_close(fd: int) -> None:
+        real_close(fd)
+        monkeypatch.setattr(os, "close", real_close)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "close", interrupted_close)
+    with pytest.raises(KeyboardInterrupt), atomic_output(tmp_path / "rec.nc") as temporary:
+        temporary.write_bytes(b"never")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_8_b_a_stale_part_of_the_same_output_is_removed(tmp_path):
     stale = tmp_path / ".rec.nc.k1ll3d00.part"  # what SIGKILL leaves
     other = tmp_path / ".other.nc.k1ll3d00.part"

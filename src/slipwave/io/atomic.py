@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import glob
 import os
-import tempfile
+import secrets
 from collections.abc import Iterator
 from os import PathLike
 from pathlib import Path
@@ -40,12 +40,18 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     target.parent.mkdir(parents=True, exist_ok=True)
     for stale in target.parent.glob(f".{glob.escape(target.name)}.*.part"):
         stale.unlink(missing_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    os.close(fd)
-    temporary = Path(name)
+    # The name is drawn before the file exists, so that an interrupt (SIGTERM arrives
+    # as KeyboardInterrupt) just after its creation still finds it in ``finally``.
+    temporary = target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
     try:
+        while True:
+            try:
+                os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+                break
+            except FileExistsError:  # another write's file: draw again
+                temporary = target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
         yield temporary
-        temporary.chmod(0o666 & ~_UMASK)  # mkstemp makes 0600; outputs follow the umask
+        temporary.chmod(0o666 & ~_UMASK)  # created 0600; outputs follow the umask
         os.replace(temporary, target)
     finally:
         temporary.unlink(missing_ok=True)
