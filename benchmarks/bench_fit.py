@@ -49,7 +49,16 @@ from slipwave.bench.replay import replay_test, sequence_scatter
 from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.compare import compare_test, verdict_counts
 from slipwave.events import detect_events
-from slipwave.fit import LAWS, chosen_law, fit_test, law_misfit, law_of, measured_events
+from slipwave.fit import (
+    COEFFICIENTS,
+    LAWS,
+    ROUGHNESS_STEP,
+    chosen_law,
+    fit_test,
+    law_misfit,
+    law_of,
+    measured_events,
+)
 from slipwave.io import read_acquisition
 from slipwave.solver import Coulomb
 from targets import check, finish
@@ -57,8 +66,7 @@ from targets import check, finish
 ROOT = Path(__file__).parents[1]
 CELLS = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
 ELEMENTS = 80
-COEFFICIENTS = ("fs", "fd", "fs_final")
-NEARBY = (0.998, 1.002)
+NEARBY = (1.0 - ROUGHNESS_STEP, 1.0 + ROUGHNESS_STEP)
 """The truth's friction coefficients scaled by these, to measure the misfit's roughness."""
 
 

@@ -955,7 +955,7 @@ def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
     return min(tried, key=objective)
 
 
-_COEFFICIENTS = ("fs", "fd", "fs_final")
+COEFFICIENTS = ("fs", "fd", "fs_final")
 """Parameters that are friction coefficients (scaled by a load-cell calibration error)."""
 
 _SIMPLEX = {"fs": 0.02, "fd": 0.005, "fs_final": 0.03, "runin_slips": 1.0, "dc": 0.03}
@@ -1057,7 +1057,7 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     # A scale error common to both load cells multiplies every T/|N|, hence every
     # coefficient, alike: its 95 % range, independent of the fit's own error.
     calibration = np.array([abs(value) * 1.96 * np.sqrt(2.0) * calibration_error
-                            if name in _COEFFICIENTS else 0.0
+                            if name in COEFFICIENTS else 0.0
                             for name, value in zip(names, theta, strict=True)])
     half = calibration
     if all(column is not None for column in jacobian):
@@ -1092,7 +1092,7 @@ def _nearby(objective: _Objective) -> tuple[tuple[float, ...], tuple[float, floa
     """
     theta = min(objective.cache, key=objective.cache.__getitem__)
     low, high = (objective(tuple(
-        value * (1.0 + sign * ROUGHNESS_STEP) if name in _COEFFICIENTS else value
+        value * (1.0 + sign * ROUGHNESS_STEP) if name in COEFFICIENTS else value
         for name, value in zip(objective.names, theta, strict=True)))
         for sign in (-1.0, 1.0))
     return theta, (float(low), float(high))

@@ -14,6 +14,11 @@ _UMASK = os.umask(0)
 os.umask(_UMASK)
 
 
+def _part_name(target: Path) -> Path:
+    """A random ``.NAME.<random>.part`` beside ``target``."""
+    return target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
+
+
 @contextlib.contextmanager
 def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     """Give a temporary path beside ``path`` and move it into place on success.
@@ -42,14 +47,14 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
         stale.unlink(missing_ok=True)
     # The name is drawn before the file exists, so that an interrupt (SIGTERM arrives
     # as KeyboardInterrupt) just after its creation still finds it in ``finally``.
-    temporary = target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
+    temporary = _part_name(target)
     try:
         while True:
             try:
                 os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
                 break
             except FileExistsError:  # another write's file: draw again
-                temporary = target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
+                temporary = _part_name(target)
         yield temporary
         temporary.chmod(0o666 & ~_UMASK)  # created 0600; outputs follow the umask
         os.replace(temporary, target)
