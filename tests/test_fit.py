@@ -14,6 +14,7 @@ from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
 from slipwave.fit import (
+    FIRST_SLIP_REACH,
     PARTIAL_DROP_SIGMA,
     RATIO_SIGMA,
     ROUGHNESS_STEP,
@@ -137,11 +138,12 @@ def test_first_slip_load_rises_steadily_with_fs(tmp_path):
 
 
 class _FirstSlipObjective:
-    """A stand-in for the fit's objective: the first slip at T/|N| 0.1 + 0.6 fs + 0.5 Dc."""
+    """A stand-in for the fit's objective: the first slip at T/|N| 0.1 + slope fs + 0.5 Dc."""
 
-    def __init__(self, target: float):
+    def __init__(self, target: float, slope: float = 0.6):
         self.measured = SlipFeatures(pd.DataFrame(), 0, 0.3, 90.0, 100.0,
                                      first_time=10.0, first_ratio=target)
+        self.slope = slope
         self.features: dict[tuple[float, ...], SlipFeatures] = {}
         self.cache: dict[tuple[float, ...], float] = {}
 
@@ -150,7 +152,7 @@ class _FirstSlipObjective:
 
     def __call__(self, theta):
         key = self.clip(theta)
-        first = 0.1 + 0.6 * key[0] + 0.5 * key[2]
+        first = 0.1 + self.slope * key[0] + 0.5 * key[2]
         self.features[key] = replace(self.measured, first_ratio=first)
         self.cache[key] = ((first - self.measured.first_ratio) / 0.01) ** 2
         return self.cache[key]
@@ -168,6 +170,24 @@ def test_a_weakening_start_moves_fs_until_its_first_slip_comes_at_the_tests():
     blind = _FirstSlipObjective(target=float("nan"))
     assert _first_slip_match(blind, (1.1, 0.6, 0.1)) == (1.1, 0.6, 0.1)
     assert len(blind.cache) == 1
+
+
+def test_a_weakening_start_stops_where_its_first_slip_does_not_follow_fs():
+    # a first slip nearly blind to fs (slope 0.1: a gross slip where the test's first
+    # was partial): one step at the nominal slope, then no wild secant step
+    flat = _FirstSlipObjective(target=0.1 + 0.1 * 0.9 + 0.5 * 0.1, slope=0.1)
+    assert _first_slip_match(flat, (1.1, 0.6, 0.1)) == pytest.approx((1.1 - 0.02 / 1.2, 0.6,
+                                                                      0.1))
+    assert len(flat.cache) == 2
+    # a first slip far above the test's: fs moves by at most FIRST_SLIP_REACH a step
+    far = _FirstSlipObjective(target=0.1 + 0.6 * 0.5 + 0.5 * 0.1)
+    _first_slip_match(far, (1.2, 0.6, 0.1))
+    assert [theta[0] for theta in far.cache] == pytest.approx(
+        [1.2, 1.2 - FIRST_SLIP_REACH, 1.2 - 2 * FIRST_SLIP_REACH])
+    # a match asking for fs at or below fd is not run
+    below = _FirstSlipObjective(target=0.1 + 0.6 * 0.5 + 0.5 * 0.1)
+    _first_slip_match(below, (0.8, 0.6, 0.1))
+    assert all(theta[0] > 0.6 for theta in below.cache)
 
 
 def test_a_partial_slip_moving_the_edges_as_gross_ones_do_sets_no_threshold():

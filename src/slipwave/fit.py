@@ -921,6 +921,10 @@ FIRST_SLIP_SLOPE = 1.2
 """How T/|N| before a test's first slip rises with fs (about 1.2 per unit on 80
 elements, :class:`SlipFeatures`): the first step of :func:`_first_slip_match`."""
 
+FIRST_SLIP_REACH = 0.2
+"""The largest move of fs in one step of :func:`_first_slip_match` (Coulomb's fs read
+a weakening law's 0.04-0.28 high in four tests: two steps cover it)."""
+
 
 def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
                       steps: int = 2) -> tuple[float, ...]:
@@ -928,7 +932,10 @@ def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
 
     The first slip's T/|N| (:attr:`SlipFeatures.first_ratio`) is matched, since it is
     what carries fs most directly. The first step takes :data:`FIRST_SLIP_SLOPE`, the
-    next the secant of the runs so far (that slope where theirs is not positive).
+    next the secant of the runs so far. It stops where the first slip does not follow
+    fs (a secant below a quarter of that slope: a law whose first slip is a gross one,
+    say, that no fs brings down to a measured partial slip's), where the match asks
+    for fs at or below fd, and each step moves fs by at most :data:`FIRST_SLIP_REACH`.
     Returns the run of lowest misfit among those tried (``theta`` itself without a
     measured or simulated first slip).
     """
@@ -944,9 +951,14 @@ def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
         slope = FIRST_SLIP_SLOPE
         if len(points) > 1:
             (fs_a, ratio_a), (fs_b, ratio_b) = points[-2:]
-            if fs_b != fs_a and (ratio_b - ratio_a) / (fs_b - fs_a) > 0:
-                slope = (ratio_b - ratio_a) / (fs_b - fs_a)
-        fs = points[-1][0] - (points[-1][1] - target) / slope
+            if fs_b == fs_a or (ratio_b - ratio_a) / (fs_b - fs_a) < FIRST_SLIP_SLOPE / 4:
+                break
+            slope = (ratio_b - ratio_a) / (fs_b - fs_a)
+        move = float(np.clip((target - points[-1][1]) / slope, -FIRST_SLIP_REACH,
+                             FIRST_SLIP_REACH))
+        fs = points[-1][0] + move
+        if fs <= tried[-1][1]:
+            break
         step = objective.clip((fs, *tried[-1][1:]))
         if step in objective.cache:
             break

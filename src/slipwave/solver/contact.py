@@ -29,7 +29,7 @@ slipped form the increment's wave.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.linalg.lapack import dgetrf, dgetrs
@@ -37,6 +37,7 @@ from scipy.linalg.lapack import dgetrf, dgetrs
 from slipwave.errors import SlipwaveError
 
 OPEN, STICK, SLIP = 0, 1, 2
+_ONE = np.ones(1)
 
 _MAX_ITERATIONS = 60
 _PREDICTOR = 0.9  # see _iterate
@@ -63,7 +64,7 @@ class NotConverged(Exception):  # noqa: N818 - an internal signal, not an error 
     """The active set did not settle, or the linear problem was singular."""
 
 
-@dataclass
+@dataclass(frozen=True)
 class Control:
     """Prescribed flat motion or total force for one increment.
 
@@ -79,10 +80,21 @@ class Control:
     T: float | None = None
     N: float | None = None
     machine: float = 0.0
+    kinds: tuple[bool, ...] = field(init=False, repr=False, compare=False)
+    key: bytes = field(init=False, repr=False, compare=False)
+    given: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if (self.dx is None) == (self.T is None) or (self.dy is None) == (self.N is None):
             raise SlipwaveError("give exactly one of dx/T and one of dy/N")
+        # what a zone state's factorisation depends on, and the values it is solved
+        # for: read at every solve of the increment, so made once
+        kinds = (self.dx is None, self.dy is None, self.T is not None, self.N is not None)
+        object.__setattr__(self, "kinds", kinds)
+        object.__setattr__(self, "key", bytes(kinds) + np.float64(self.machine).tobytes())
+        object.__setattr__(self, "given", np.array(
+            [value for value in (self.dx, self.dy, self.T, self.N) if value is not None],
+            dtype=np.float64))
 
 
 @dataclass
@@ -244,15 +256,13 @@ class Body:
 
     def _plan(self, state: np.ndarray, mu: np.ndarray, control: Control) -> _Plan:
         """The factorised problem of a zone state, kept or made (and then kept)."""
-        kinds = (control.dx is None, control.dy is None, control.T is not None,
-                 control.N is not None)
-        shape = state.tobytes() + bytes(kinds) + np.float64(control.machine).tobytes()
+        shape = state.tobytes() + control.key
         key = shape + np.where(state == SLIP, mu, 0.0).tobytes()
         plan = self._plans.pop(key, None)  # put back last: the most recently used
         if plan is None:
             layout = self._layouts.pop(shape, None)
             if layout is None:
-                layout = _Layout(self, state, kinds, control.machine)
+                layout = _Layout(self, state, control.kinds, control.machine)
                 while len(self._layouts) >= _LAYOUTS:
                     self._layouts.pop(next(iter(self._layouts)))
             self._layouts[shape] = layout
@@ -648,6 +658,7 @@ class _Layout:
         self.n_stick = int(self.stick.sum())
         n_open = body.n - int(self.contact.sum())
         self.compliance = body.C is not None and self.n_stick < n_open
+        self.stick_nodes = np.flatnonzero(self.stick)
         self.stick_x = ix[self.stick]
         self.contact_y = iy[self.contact]
         self.slip_x = ix[self.slip]
@@ -816,10 +827,7 @@ class _Plan:
         1, the stuck nodes' s_prev, then what this state's kind prescribes of dx,
         dy, T and N, in that order.
         """
-        layout = self.layout
-        given = [value for value in (control.dx, control.dy, control.T, control.N)
-                 if value is not None]
-        return np.concatenate([[1.0], s_prev[layout.stick], given])
+        return np.concatenate((_ONE, s_prev.take(self.layout.stick_nodes), control.given))
 
     def keep_operator(self) -> None:
         """Keep the solution as an affine map of :meth:`inputs`.
