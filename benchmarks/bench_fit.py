@@ -172,8 +172,9 @@ def run_test(truth: dict[str, Any], seed: int, laws: list[str],
 
 def nearby_misfits(result: dict[str, Any]) -> str:
     """The truth's misfits on its own setup with its coefficients scaled by NEARBY."""
-    return ", ".join(f"{result['misfits'][f'truth x{scale:g}, true setup']:.1f}"
-                     for scale in NEARBY)
+    return "coefficients " + ", ".join(
+        f"x{scale:g} {result['misfits'][f'truth x{scale:g}, true setup']:.1f}"
+        for scale in NEARBY)
 
 
 def recovery(count: int, jobs: int) -> None:
@@ -203,7 +204,7 @@ def recovery(count: int, jobs: int) -> None:
               f"the true law's {result['truth_differs']}; misfit fit "
               f"{result['misfits']['fit']:.1f}, truth {result['misfits']['truth']:.1f}, "
               f"truth on the true setup {result['misfits']['truth, true setup']:.1f} "
-              f"(coefficients x0.998, x1.002: {nearby_misfits(result)}) "
+              f"({nearby_misfits(result)}) "
               f"(measured N {result['setup']['normal_load_n']:.2f}, v "
               f"{result['setup']['speed_mm_s']:.5f}, k "
               f"{result['setup']['machine_stiffness_n_mm']:.2f}); "
@@ -259,8 +260,7 @@ def slip_weakening(jobs: int) -> None:
                           for name in errors)
               + f", truth inside all three {inside}; misfit fit {misfits['fit']:.2f}, truth "
               f"{misfits['truth']:.2f}, truth on the true setup "
-              f"{misfits['truth, true setup']:.2f} (coefficients x0.998, x1.002: "
-              f"{nearby_misfits(result)}; Dc x0.9, x1.1: "
+              f"{misfits['truth, true setup']:.2f} ({nearby_misfits(result)}; Dc x0.9, x1.1: "
               f"{misfits['truth, Dc x0.9, true setup']:.2f}, "
               f"{misfits['truth, Dc x1.1, true setup']:.2f}); the test against its Coulomb "
               f"simulation differs on {result['also']['differs']}, against slip-weakening's "

@@ -951,9 +951,9 @@ def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
         slope = FIRST_SLIP_SLOPE
         if len(points) > 1:
             (fs_a, ratio_a), (fs_b, ratio_b) = points[-2:]
-            if fs_b == fs_a or (ratio_b - ratio_a) / (fs_b - fs_a) < FIRST_SLIP_SLOPE / 4:
+            slope = (ratio_b - ratio_a) / (fs_b - fs_a) if fs_b != fs_a else 0.0
+            if slope < FIRST_SLIP_SLOPE / 4:
                 break
-            slope = (ratio_b - ratio_a) / (fs_b - fs_a)
         move = float(np.clip((target - points[-1][1]) / slope, -FIRST_SLIP_REACH,
                              FIRST_SLIP_REACH))
         fs = points[-1][0] + move
