@@ -6,14 +6,14 @@ STAMP := $(VENV)/.installed
 # Rules call the `slipwave` command: the venv goes first on PATH.
 export PATH := $(BIN):$(PATH)
 
-.PHONY: install system-deps run test test-fast lint bench slurm-test clean
+.PHONY: install system-deps run test test-fast lint docs bench slurm-test clean
 
 install: $(STAMP)
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
 
 # What pip cannot install: Debian's Chromium and poppler-utils, with which the tests look
@@ -33,16 +33,24 @@ run: $(STAMP)
 	$(BIN)/snakemake --cores 2
 
 # ruff (style, imports, docstring layout), numpydoc (every public function documents
-# its parameters and what it returns), mypy (types).
+# its parameters and what it returns), mypy (types), import-linter (the package's
+# layers: no cycle, no upward import, no video library under the analysis).
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/numpydoc lint $$(find src/slipwave -name '*.py')
 	$(BIN)/mypy
+	$(BIN)/lint-imports
+
+# The documentation site in docs/_build/html, warnings as errors; the doctest builder
+# runs the tutorial (the default campaign through the library).
+docs: $(STAMP)
+	$(BIN)/sphinx-build -q -W --keep-going -b html docs docs/_build/html
+	$(BIN)/sphinx-build -q -W -b doctest docs docs/_build/doctest
 
 # Two pytest workers (pytest-xdist), a test file to each: a file's module fixtures (the
 # default campaign simulated, the Colas records denoised) are built once. One BLAS
 # thread per worker: two workers with two threads each on two cores run slower than one.
-test: lint
+test: lint docs
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 \
 		$(BIN)/python -m pytest -n 2 --dist loadfile
 
@@ -61,6 +69,6 @@ bench: $(STAMP)
 		$(BIN)/python $$bench || status=1; done; exit $$status
 
 clean:
-	rm -rf .snakemake
+	rm -rf .snakemake docs/_build docs/generated
 	find results -mindepth 1 ! -name README.md -delete
 	find reports -mindepth 1 ! -name README.md -delete

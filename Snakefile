@@ -4,11 +4,12 @@
 #
 # One stage, one name: rule <stage> lives in workflow/rules/<stage>.smk, runs
 # `slipwave <stage>` and its code is the module the README's stage table names.
-import json
+import os
 
 from snakemake.utils import min_version, validate
 
 from slipwave.map import friction_grid, shard_count
+from slipwave.validation import load_schema, schema_path
 from slipwave.campaign import (
     check_campaign,
     check_config_files,
@@ -26,18 +27,24 @@ configfile: "config/config.yaml"
 
 
 # Each config file against the schema first (errors name its line), then the merged
-# config: the schema carries every default, and validate() fills them in.
-with open(f"{workflow.basedir}/workflow/schemas/config.schema.json") as schema:
-    check_config_files(
-        [*workflow.configfiles, *workflow.overwrite_configfiles],
-        json.load(schema),
-        command_line=workflow.overwrite_configfiles,
-    )
-validate(config, "workflow/schemas/config.schema.json")
+# config: the schema, shipped with the package, carries every default (the library
+# reads its defaults from it too), and validate() fills them in.
+check_config_files(
+    [*workflow.configfiles, *workflow.overwrite_configfiles],
+    load_schema("config"),
+    command_line=workflow.overwrite_configfiles,
+)
+validate(config, str(schema_path("config")))
+# The slabs' condensations are kept for the next job in cache_dir: a side folder, not
+# an input, so it reaches the jobs through their environment and changing it reruns
+# nothing (no product depends on it).
+if config["cache_dir"]:
+    os.environ["SLIPWAVE_CACHE_DIR"] = os.path.abspath(config["cache_dir"])
+else:
+    os.environ.pop("SLIPWAVE_CACHE_DIR", None)
 campaign = read_campaign(config["tests"])
 # each row against the table's schema, errors naming the table's line
-with open(f"{workflow.basedir}/workflow/schemas/tests.schema.json") as schema:
-    check_campaign(config, campaign, json.load(schema))
+check_campaign(config, campaign, load_schema("tests"))
 
 TEST_IDS = list(campaign["test_id"])
 FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
@@ -63,8 +70,10 @@ include: "workflow/rules/summary.smk"
 include: "workflow/rules/kymograph.smk"
 include: "workflow/rules/waves.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/campaign_report.smk"
 include: "workflow/rules/map.smk"
 include: "workflow/rules/fit.smk"
+include: "workflow/rules/fits.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/compare.smk"
 

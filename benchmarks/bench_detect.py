@@ -23,8 +23,9 @@ import numpy as np
 import scipy.io
 
 from slipwave.bench.generate import BenchTest, simulate_test
-from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors, clean_signals
+from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors
 from slipwave.events import detect_events, load_drops
+from slipwave.solver.signals import clean_signals
 from targets import check, finish
 
 SAMPLES = 10_000_000

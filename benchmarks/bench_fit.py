@@ -45,8 +45,6 @@ import pandas as pd
 import xarray as xr
 
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
-from slipwave.bench.replay import replay_test, sequence_scatter
-from slipwave.bench.setup import TestSetup, read_test_setup
 from slipwave.compare import compare_test, verdict_counts
 from slipwave.events import detect_events
 from slipwave.fit import (
@@ -60,6 +58,8 @@ from slipwave.fit import (
     measured_events,
 )
 from slipwave.io import read_acquisition
+from slipwave.setup import TestSetup, read_test_setup
+from slipwave.simulate import replay_test, sequence_scatter
 from slipwave.solver import Coulomb
 from targets import check, finish
 

@@ -28,7 +28,7 @@ from slipwave.io import read_acquisition
 from targets import check, finish
 
 TARGET_CASES = 10_000
-SCHEMA = json.loads((Path(__file__).parents[1] / "workflow/schemas/tests.schema.json")
+SCHEMA = json.loads((Path(__file__).parents[1] / "src/slipwave/schemas/tests.schema.json")
                     .read_text())
 CONFIG = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {"labview_en": {"a": "T"}}}
 

@@ -2,7 +2,7 @@
 
 Times ``slipwave report`` (HTML and PDF, every section: signals, zooms, space-time,
 frames, laws, map, video) on each test of the default campaign, and
-``slipwave report-campaign``, from the workflow's results (``make run`` first).
+``slipwave campaign-report``, from the workflow's results (``make run`` first).
 
 The figures are drawn on 2 processes, as the workflow's rule does
 (``REPORT_THREADS=1`` to time one).
@@ -68,7 +68,7 @@ def main() -> None:
                   f"PDF {size:.1f} MB)")
         comparisons = [f"results/{t}/comparison.json" for t in campaign["test_id"]]
         start = time.perf_counter()
-        subprocess.run([slipwave, "report-campaign", "--summary", "results/summary.csv",
+        subprocess.run([slipwave, "campaign-report", "--summary", "results/summary.csv",
                         "--fits", "results/fits.csv", "--comparisons", *comparisons,
                         "--map", "results/map/map.nc", "-o", str(out / "campaign.html"),
                         "--pdf", str(out / "campaign.pdf")], cwd=ROOT, check=True,

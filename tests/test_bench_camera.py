@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from slipwave.bench.camera import Camera, Photoelastic, write_image_sequence, write_video
+from slipwave.bench.camera import write_image_sequence, write_video
 from slipwave.errors import SlipwaveError
+from slipwave.photoelastic import Camera, Photoelastic
 from slipwave.solver import Coulomb, LoadPath, Slab, simulate
 
 SLAB = Slab(height=40.0, elements=80)

@@ -10,10 +10,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from slipwave.bench.camera import Camera, Photoelastic
-from slipwave.bench.generate import BenchTest, simulate_test, write_test
+from slipwave.bench.generate import BenchTest, load_tests, simulate_test, write_test
 from slipwave.cli import main
+from slipwave.errors import ConfigError
 from slipwave.io import read_acquisition
+from slipwave.photoelastic import Camera, Photoelastic
 
 CAMPAIGN = Path(__file__).parents[1] / "raw_data" / "bench"
 
@@ -149,3 +150,35 @@ def test_frames_as_image_sequence(tmp_path):
     assert paths["video"].name == "small_frames" and len(images) == result.frame_times.size
     with av.open(str(images[100])) as container:
         assert next(container.decode(video=0)).width == 160
+
+
+def test_bench_ids_stay_inside_the_output_folder(tmp_path, capsys):
+    config = tmp_path / "c.yaml"
+    config.write_text("tests:\n  - test_id: ../escaped\n    duration: 20\n    video: none\n")
+    assert main(["bench", str(config), "-o", str(tmp_path / "out"), "--quiet"]) == 1
+    assert "c.yaml, line 2: tests[0] (test '../escaped').test_id" in capsys.readouterr().err
+    assert not (tmp_path / "escaped.csv").exists() and not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError, match="does not match"):
+        BenchTest("../escaped")
+
+
+@pytest.mark.parametrize(("setting", "message"), [
+    ("duration: 0", "duration: 0 is less than or equal to the minimum of 0"),
+    ("duration: -10", "duration: -10 is less than or equal to the minimum of 0"),
+    ("sample_rate: 0", "sample_rate: 0 is less than or equal to the minimum of 0"),
+    ("height: forty", "height: 'forty' is not of type 'number'"),
+    ("video: avi", "video: 'avi' is not one of"),
+    ("speed: 0", "speed: 0 is less than or equal to the minimum of 0"),
+])
+def test_bench_yaml_is_checked_against_its_schema(tmp_path, capsys, setting, message):
+    config = tmp_path / "c.yaml"
+    config.write_text(f"tests:\n  - test_id: a\n    {setting}\n")
+    assert main(["bench", str(config), "-o", str(tmp_path / "out"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert f"c.yaml, line 3: tests[0] (test 'a').{message}" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_load_tests_names_the_source():
+    with pytest.raises(ConfigError, match=r"the bench config: tests: \[\] should be non-empty"):
+        load_tests({"tests": []})

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from slipwave.bench import DEFAULT_SENSORS, Sensor, apply_sensors, clean_signals
-from slipwave.bench.sensors import step_times, wave_durations
+from slipwave.bench import DEFAULT_SENSORS, Sensor, apply_sensors
 from slipwave.errors import SlipwaveError
 from slipwave.io import read_acquisition, write_acquisition
 from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+from slipwave.solver.signals import clean_signals, step_times, wave_durations
 
 SPEED, LOADING, RATE = 0.048, 10.0, 200.0
 

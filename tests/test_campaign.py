@@ -4,6 +4,7 @@ import pytest
 
 from slipwave.campaign import (
     check_campaign,
+    check_config_files,
     column_map,
     column_pairs,
     read_campaign,
@@ -54,3 +55,16 @@ def test_check_campaign_names_the_test_with_an_unknown_map(write):
     config = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {"fr": {"Temps": "time"}}}
     with pytest.raises(ConfigError, match=r"t.tsv, line 3 \(test 'b'\): column map 'de' is not"):
         check_campaign(config, table)
+
+
+def test_campaign_tables_and_configs(write, tmp_path):
+    with pytest.raises(ConfigError, match=r"t\.tsv: no test: the table has a header but no row"):
+        read_campaign(write("# a campaign\ntest_id\tcsv\n", "t.tsv"))
+    table = read_campaign(write("# comment\n\ntest_id\tcsv\na\tx.csv\n# gone\nb\ty.csv\n",
+                                "u.tsv"))
+    assert table.attrs["lines"] == {"a": 4, "b": 6}
+    config = tmp_path / "mine.yaml"
+    config.write_text("column_maps: {}\n")
+    with pytest.raises(ConfigError, match=r"mine\.yaml: no 'tests' entry naming the campaign"):
+        check_config_files([config], command_line=[config])
+    check_config_files([config])  # the workflow's own config only: fine

@@ -52,3 +52,19 @@ def test_sawtooth_writes_three_tests(tmp_path):
     assert main(["sawtooth", str(tmp_path), "--seed", "4"]) == 0
     assert sorted(p.name for p in tmp_path.glob("*.csv")) == [
         "saw_hl025.csv", "saw_hl050.csv", "saw_hl075.csv"]
+
+
+def test_an_unexpected_exception_is_one_line_and_a_log(monkeypatch, tmp_path, capsys):
+    def broken(args):
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr("slipwave.cli._summary", broken)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", None)
+    assert main(["summary", "x.nc", "-o", "y.csv"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "internal error (ZeroDivisionError: a bug)" in err
+    log = next(tmp_path.glob("slipwave-crash-*.log"))
+    assert "Traceback" in log.read_text() and str(log) in err

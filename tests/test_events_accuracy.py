@@ -22,10 +22,11 @@ import pytest
 import yaml
 
 from slipwave.bench.generate import BenchResult, load_tests, simulate_test
-from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors, clean_signals
+from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors
 from slipwave.events import detect_events
 from slipwave.fit import edge_threshold
 from slipwave.io import read_acquisition, write_acquisition
+from slipwave.solver.signals import clean_signals
 
 pytestmark = pytest.mark.slow  # whole virtual-bench tests: make test-fast leaves them out
 

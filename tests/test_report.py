@@ -21,17 +21,17 @@ import pandas as pd
 import pytest
 
 from slipwave.bench.generate import BenchTest, simulate_test
-from slipwave.bench.replay import replay_test, sequence_scatter
-from slipwave.bench.setup import read_test_setup
+from slipwave.campaign_report import campaign_summary, write_campaign_report
 from slipwave.compare import compare_test
 from slipwave.events import detect_events, events_dataset, segment_phases
-from slipwave.fit import chosen_law, fit_test, fits_table, measured_events
+from slipwave.fit import chosen_law, fit_test, measured_events
+from slipwave.fits import fits_table
 from slipwave.report import (
-    campaign_summary,
     pairing_summary,
-    write_campaign_report,
     write_test_page,
 )
+from slipwave.setup import read_test_setup
+from slipwave.simulate import replay_test, sequence_scatter
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 POPPLER = shutil.which("pdftoppm")

@@ -12,29 +12,61 @@ from slipwave.cli import main
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.io import read_dataset
 from slipwave.plot import plot_zones
-from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+from slipwave.solver import Body, Coulomb, LoadPath, Slab, SolverCache, simulate
 from slipwave.solver import contact as contact_module
 from slipwave.solver import slab as slab_module
 
 
-def test_condensed_matrices_cached_in_memory_and_in_a_store(tmp_path, monkeypatch):
-    store = DiskCache(tmp_path)
-    slab_module.forget_condensed()
+def test_a_cache_condenses_a_geometry_once_and_a_store_keeps_it_across_caches(
+        tmp_path, monkeypatch):
     built = []
     assemble = slab_module.assemble_condensed
     monkeypatch.setattr(slab_module, "assemble_condensed",
                         lambda slab: built.append(slab) or assemble(slab))
     slab = Slab(height=30.0, elements=40)
-    first = slab_module.condense(slab, store=store)
+    cache = SolverCache(DiskCache(tmp_path))
+    first = slab_module.condense(slab, cache=cache)
     assert len(list(tmp_path.glob("condensed-*.npz"))) == 1
-    slab_module.condense(Slab(height=30.0, elements=40, youngs_modulus=14.0), store=store)
-    assert len(built) == 1  # E does not rebuild
-    slab_module.forget_condensed()
-    monkeypatch.setattr(slab_module, "assemble_condensed", lambda *a, **k: pytest.fail("rebuilt"))
-    again = slab_module.condense(slab, store=store)  # from the store, not rebuilt
-    np.testing.assert_array_equal(again.stiffness, first.stiffness)
-    doubled = slab_module.condense(Slab(height=30.0, elements=40, youngs_modulus=14.0))
+    doubled = slab_module.condense(Slab(height=30.0, elements=40, youngs_modulus=14.0),
+                                   cache=cache)
+    assert len(built) == 1  # E scales the unit condensation: not rebuilt
     np.testing.assert_allclose(doubled.stiffness, 2 * first.stiffness)
+    monkeypatch.setattr(slab_module, "assemble_condensed", lambda *a, **k: pytest.fail("rebuilt"))
+    again = slab_module.condense(slab, cache=SolverCache(DiskCache(tmp_path)))  # another process
+    np.testing.assert_array_equal(again.stiffness, first.stiffness)
+
+
+def test_without_a_cache_nothing_is_kept(monkeypatch):
+    built = []
+    assemble = slab_module.assemble_condensed
+    monkeypatch.setattr(slab_module, "assemble_condensed",
+                        lambda slab: built.append(slab) or assemble(slab))
+    for _ in range(2):
+        slab_module.condense(Slab(height=30.0, elements=20))
+    assert len(built) == 2
+
+
+def test_a_cache_keeps_the_frictionless_approach_and_gives_the_same_results():
+    slab, path = Slab(height=40.0, elements=24), LoadPath(normal_steps=6, normal_friction=False)
+    cache = SolverCache()
+    first = simulate(slab, Coulomb(fs=0.8, fd=0.6), path, cache=cache)
+    pressed = []
+    solve = Body.solve_increment
+
+    def counted(body, control, *args, **kwargs):
+        if control.dx == 0.0:  # the flat pressed, not yet driven
+            pressed.append(control.N)
+        return solve(body, control, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Body, "solve_increment", counted)
+        kept = simulate(slab, Coulomb(fs=0.8, fd=0.6), path, cache=cache)
+        assert pressed == []  # the kept approach: the flat is not pressed again
+        afresh = simulate(slab, Coulomb(fs=0.8, fd=0.6), path)
+        assert len(pressed) >= path.normal_steps
+    for name in ("T", "N", "DG", "DD", "state", "q"):
+        np.testing.assert_array_equal(kept[name].values, first[name].values)
+        np.testing.assert_array_equal(afresh[name].values, first[name].values)
 
 
 def test_damaged_store_file_is_rebuilt(tmp_path):
@@ -43,9 +75,18 @@ def test_damaged_store_file_is_rebuilt(tmp_path):
     key = slab_module.geometry_key(dataclasses.replace(slab, youngs_modulus=1.0, width=1.0))
     (tmp_path / f"condensed-{key}.npz").write_bytes(b"not an npz")
     assert store.load(key) is None
-    slab_module.forget_condensed()
-    condensed = slab_module.condense(slab, store=store)
+    condensed = slab_module.condense(slab, cache=SolverCache(store))
     np.testing.assert_allclose(store.load(key).stiffness, condensed.stiffness / 7.0, rtol=1e-12)
+
+
+def test_truncated_store_file_is_rebuilt(tmp_path):
+    store = DiskCache(tmp_path)
+    slab = Slab(height=30.0, elements=20)
+    condensed = slab_module.condense(slab, cache=SolverCache(store))
+    (stored,) = tmp_path.glob("condensed-*.npz")
+    stored.write_bytes(stored.read_bytes()[:200])
+    again = slab_module.condense(slab, cache=SolverCache(store))
+    np.testing.assert_array_equal(again.stiffness, condensed.stiffness)
 
 
 def test_condensed_stiffness_is_symmetric_positive():
@@ -114,3 +155,16 @@ def test_plot_zones_axes():
     assert ax.get_xlabel() == "x along the contact [mm]"
     assert ax.get_ylabel() == "tangential load T [N]"
     assert ax.get_xlim() == (-40.0, 40.0)
+
+
+@pytest.mark.parametrize(("option", "message"), [
+    (["--max-travel", "-5"], "max_travel must be positive, not -5"),
+    (["--max-travel", "1", "--travel-step", "0"], "travel_step must be positive, not 0"),
+])
+def test_simulate_refuses_silly_travel(tmp_path, capsys, option, message):
+    assert main(["simulate", "--fs", "1", "--elements", "8", "-o", str(tmp_path / "s.nc"),
+                 *option]) == 1
+    assert message in capsys.readouterr().err
+    with pytest.raises(SlipwaveError, match=message):
+        LoadPath(**{option[2 * k][2:].replace("-", "_"): float(option[2 * k + 1])
+                    for k in range(len(option) // 2)})

@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from slipwave.solver import Coulomb, LoadPath, Slab, condense, describe_behaviour, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, describe_behaviour, simulate
 
 # Codes of a synthetic history: the letters of node_conditions' conditions.
+CACHE = SolverCache()  # the slabs of this file, condensed once
+
 _STATE = {"O": (0, 0), "S": (1, 0), "b": (2, -1), "f": (2, 1)}
 
 
@@ -122,7 +124,7 @@ def paper_case():
     def run(fs: float, height: float = 40.0, **path: object) -> xr.Dataset:
         slab = Slab(height=height, elements=80)
         options = {"normal_control": "force", "normal_friction": False, **path}
-        return simulate(slab, Coulomb(fs=fs), LoadPath(**options), condensed=condense(slab))
+        return simulate(slab, Coulomb(fs=fs), LoadPath(**options), cache=CACHE)
 
     return run
 
@@ -321,7 +323,7 @@ MAP_BEHAVIOURS = [
 def test_each_behaviour_of_the_map_on_a_case_that_shows_it(height_ratio, fs, paper, sequence):
     slab = Slab(height=80.0 * height_ratio)
     ds = simulate(slab, Coulomb(fs=fs), LoadPath(normal_control="force", normal_friction=False),
-                  condensed=condense(slab))
+                  cache=CACHE)
     behaviour = describe_behaviour(ds)
     assert behaviour.sequence == sequence
     assert behaviour.paper_name == paper

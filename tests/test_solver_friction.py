@@ -7,7 +7,7 @@ import pytest
 
 from slipwave.bench.generate import BenchTest, simulate_test
 from slipwave.errors import SlipwaveError
-from slipwave.solver import Coulomb, LoadPath, Slab, SlipWeakening, condense, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, SlipWeakening, SolverCache, simulate
 from slipwave.solver.contact import SLIP
 
 SLAB = Slab(height=40.0, elements=80)
@@ -16,12 +16,12 @@ STICK_SLIP = LoadPath(normal_control="force", max_travel=3.0)
 
 @pytest.fixture(scope="module")
 def runs():
-    condensed = condense(SLAB)
+    cache = SolverCache()
     laws = {"coulomb": Coulomb(fs=1.0, fd=0.7), "dc 1e-4": SlipWeakening(fs=1.0, fd=0.7, dc=1e-4),
             "dc 0.05": SlipWeakening(fs=1.0, fd=0.7, dc=0.05),
             "dc 0.2": SlipWeakening(fs=1.0, fd=0.7, dc=0.2),
             "dc 2": SlipWeakening(fs=1.0, fd=0.7, dc=2.0)}
-    return {name: simulate(SLAB, law, STICK_SLIP, condensed=condensed)
+    return {name: simulate(SLAB, law, STICK_SLIP, cache=cache)
             for name, law in laws.items()}
 
 
@@ -74,7 +74,7 @@ def test_the_law_is_checked():
 def test_the_virtual_bench_writes_a_slip_weakening_test():
     spec = BenchTest("sw", height=40.0, fs=1.0, fd=0.7, fs_final=None, dc=0.1, duration=60.0,
                      loading_time=5.0, elements=40, video="none")
-    assert isinstance(spec.friction(), SlipWeakening)
+    assert spec.friction() == SlipWeakening(fs=1.0, fd=0.7, dc=0.1)
     result = simulate_test(spec, seed=1)
     assert result.recording.sizes["time"] > 5000
     assert len(result.events) >= 5

@@ -149,3 +149,27 @@ def test_command_line_kymograph_on_a_damaged_video(clip, tmp_path, capsys):
     kymo = read_dataset(output)
     assert 40 < kymo.sizes["time"] < len(clip)
     assert "damaged video" in kymo.attrs["warnings"]
+
+
+def test_a_video_damaged_in_the_middle_names_the_frames_lost(tmp_path):
+    data = bytearray((ROOT / "raw_data/bench/hl050.mkv").read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 20_000] = np.random.default_rng(0).integers(
+        0, 256, 20_000, dtype=np.uint8).tobytes()
+    damaged = tmp_path / "damaged.mkv"
+    damaged.write_bytes(bytes(data))
+    with pytest.raises(SlipwaveError, match=r"frame 3705 at 153.360 s \(frames lost between "
+                                            r"148.160 s and 153.360 s before it\)"):
+        for _ in open_frames(damaged):
+            pass
+
+
+def test_a_missing_image_is_reported_once(tmp_path):
+    images = [np.full((40, 60), k, dtype=np.uint8) for k in range(5)]
+    folder = write_image_sequence(images, np.arange(5) * 0.04, tmp_path / "frames")
+    (folder / "frame_000002.png").unlink()
+    source = open_frames(folder)
+    kymograph(source, Geometry(interface_row=30, left=10.0, right=50.0, length=80.0))
+    list(source)  # a second pass (geometry, then kymograph) does not repeat it
+    assert sum("1 image(s) missing between numbers 1 and 3" in w for w in source.warnings) == 1
+    assert len(set(source.warnings)) == len(source.warnings)

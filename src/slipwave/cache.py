@@ -1,13 +1,15 @@
 """The on-disk store of the solver's condensed matrices, shared across processes.
 
-Condensing a slab takes 0.2-1.8 s at 160 elements; every simulation of the same
-geometry (a map row, a campaign's tests, repeated runs) reuses it from here.
+Condensing a slab costs far more than one of its load steps; the simulations of the
+same geometry in other processes (a map's rows, a campaign's tests, repeated runs)
+reuse it from a folder the caller names: the workflow's ``cache_dir`` under its
+results, or the command line's ``--cache-dir``. Nothing is written anywhere else.
 """
 
 from __future__ import annotations
 
-import os
-from dataclasses import dataclass, field
+import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -16,31 +18,20 @@ from slipwave.io.atomic import atomic_output
 from slipwave.solver.slab import Condensed
 
 
-def default_cache_folder() -> Path:
-    """``$SLIPWAVE_CACHE_DIR``, else ``$XDG_CACHE_HOME/slipwave`` (``~/.cache/slipwave``).
-
-    Returns
-    -------
-    Path
-        The folder (not created).
-
-    """
-    explicit = os.environ.get("SLIPWAVE_CACHE_DIR")
-    if explicit:
-        return Path(explicit)
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "slipwave"
-
-
 @dataclass(frozen=True)
 class DiskCache:
     """Condensed matrices as ``condensed-<key>.npz`` files in ``folder``.
 
     A damaged file is rebuilt; a folder that cannot be written only costs time.
-    Hand it to :func:`slipwave.solver.condense` as ``store``.
+    Hand it to :class:`slipwave.solver.SolverCache` as its ``store``.
+
+    Attributes
+    ----------
+    folder
+        Where the files are (created on the first save).
     """
 
-    folder: Path = field(default_factory=default_cache_folder)
+    folder: Path
 
     def _path(self, key: str) -> Path:
         return Path(self.folder) / f"condensed-{key}.npz"
@@ -65,7 +56,7 @@ class DiskCache:
         try:
             with np.load(path) as stored:
                 return Condensed(stored["stiffness"], stored["sensors"], stored.get("compliance"))
-        except (OSError, ValueError, KeyError):
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
             return None  # a damaged cache file is rebuilt
 
     def save(self, key: str, condensed: Condensed) -> None:

@@ -4,8 +4,11 @@ A thin layer: argument parsing, then calls into the package. Each workflow stage
 has one name for its rule, its ``workflow/rules/<stage>.smk``, its subcommand and
 its module: ingest (:mod:`slipwave.io.ingest`), detect (:mod:`slipwave.events.detect`),
 summary (:mod:`slipwave.events.summary`), kymograph (:mod:`slipwave.video.kymograph`),
-waves (:mod:`slipwave.video.waves`) and report (:mod:`slipwave.report`). Defaults
-come from :mod:`slipwave.defaults`.
+waves (:mod:`slipwave.video.waves`), fit (:mod:`slipwave.fit`), fits
+(:mod:`slipwave.fits`), simulate (:mod:`slipwave.simulate`), compare
+(:mod:`slipwave.compare`), map_row, map_assemble and map_figures (:mod:`slipwave.map`),
+report (:mod:`slipwave.report`) and campaign_report (:mod:`slipwave.campaign_report`).
+Defaults come from :mod:`slipwave.defaults`.
 """
 
 from __future__ import annotations
@@ -16,11 +19,15 @@ import signal
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from slipwave import __version__
 from slipwave import defaults as default
 from slipwave.errors import SlipwaveError, warning_lines
+
+if TYPE_CHECKING:
+    from slipwave.events import DetectionSettings
+    from slipwave.solver import SolverCache
 
 
 def _column_pair(text: str) -> tuple[str, str]:
@@ -47,6 +54,23 @@ def _optional_float(text: str) -> float | None:
         return float(text)
     except ValueError as err:
         raise argparse.ArgumentTypeError(f"expected a number or 'none', got {text!r}") from err
+
+
+def _detection_settings(args: argparse.Namespace) -> DetectionSettings:
+    """The detection's settings of a command's options (:func:`_detection_options`)."""
+    from slipwave.events import DetectionSettings
+
+    return DetectionSettings(threshold=args.threshold, max_spike=args.max_spike,
+                             max_duration=args.max_duration, min_fall_rate=args.min_fall_rate,
+                             edge_convention=args.edge_convention)
+
+
+def _solver_cache(args: argparse.Namespace) -> SolverCache:
+    """The process's solver cache, keeping condensations in ``--cache-dir`` if given."""
+    from slipwave.cache import DiskCache
+    from slipwave.solver import SolverCache
+
+    return SolverCache(None if args.cache_dir is None else DiskCache(args.cache_dir))
 
 
 def _print_warnings(source: object, attrs: Mapping[Any, Any]) -> None:
@@ -76,12 +100,8 @@ def _detect(args: argparse.Namespace) -> None:
                                 "'slipwave simulate --fit'")
         ratio = float(simulated.attrs["gross_edge_ratio"])
         print(f"gross/partial edge threshold from the simulation: {ratio:.3g}")
-    events = detect_events(
-        recording, min_drop=args.min_drop, min_jump=args.min_jump, threshold=args.threshold,
-        max_spike=args.max_spike, max_duration=args.max_duration,
-        min_fall_rate=args.min_fall_rate, gross_edge_ratio=ratio,
-        edge_convention=args.edge_convention,
-    )
+    events = detect_events(recording, **_detection_settings(args).keywords(
+        min_drop=args.min_drop, min_jump=args.min_jump, gross_edge_ratio=ratio))
     dataset = events_dataset(events, segment_phases(recording, events))
     dataset.attrs["test_id"] = args.test_id or str(recording.attrs.get("test_id", ""))
     dataset.attrs["source"] = str(args.recording)
@@ -104,18 +124,20 @@ def _setting_pair(text: str) -> tuple[str, str]:
 def _fit(args: argparse.Namespace) -> None:
     import json
 
-    from slipwave.bench.setup import read_test_setup
     from slipwave.fit import fit_test, measured_events
     from slipwave.io import atomic_output, read_dataset
+    from slipwave.setup import read_test_setup
 
     recording = read_dataset(args.recording)
     cells = {"test_id": args.test_id or str(recording.attrs.get("test_id", "")),
              **dict(args.setting)}
     setup = read_test_setup(recording, cells)
-    events = measured_events(recording, edge_convention=args.edge_convention)
+    detection = _detection_settings(args)
+    events = measured_events(recording, detection=detection)
     fit = fit_test(setup, events, laws=args.laws, elements=args.elements,
                    max_evaluations=args.max_evaluations,
-                   calibration_error=args.load_calibration)
+                   calibration_error=args.load_calibration, detection=detection,
+                   cache=_solver_cache(args))
     seconds = {law: entry.pop("seconds") for law, entry in fit["laws"].items()}
     with atomic_output(args.output) as temporary:  # (wall times to the log only)
         temporary.write_text(json.dumps(fit, indent=2), encoding="utf-8")
@@ -142,12 +164,15 @@ def _compare(args: argparse.Namespace) -> None:
     events_ds = read_dataset(args.events)
     measured = events_table(events_ds)
     fit = read_fit(args.fit)
+    detection = _detection_settings(args)
+    _check_detection(fit, detection, args.fit)
     waves = pd.read_csv(args.waves) if args.waves is not None else None
     table = compare_test(measured, read_dataset(args.simulated),
                          read_dataset(args.steps) if args.steps else None, waves,
                          min_drop=float(events_ds.attrs.get("min_drop", float("nan")))
                          if "min_drop" in events_ds.attrs else None,
-                         scatter=pd.read_csv(args.scatter) if args.scatter else None)
+                         scatter=pd.read_csv(args.scatter) if args.scatter else None,
+                         detection=detection)
     summary: dict[str, Any] = {"test_id": fit["test_id"], "law": fit["chosen"],
                                "parameters": fit["parameters"],
                                "verdicts": verdict_counts(table)}
@@ -169,7 +194,8 @@ def _compare(args: argparse.Namespace) -> None:
 
 
 def _fits(args: argparse.Namespace) -> None:
-    from slipwave.fit import fits_table, read_fit
+    from slipwave.fit import read_fit
+    from slipwave.fits import fits_table
     from slipwave.io import atomic_output
 
     table = fits_table([read_fit(str(path)) for path in args.fits])
@@ -285,12 +311,12 @@ def _report(args: argparse.Namespace) -> None:
     print(f"{args.recording} -> {args.output}" + (f", {args.pdf}" if args.pdf else ""))
 
 
-def _report_campaign(args: argparse.Namespace) -> None:
+def _campaign_report(args: argparse.Namespace) -> None:
     import json
 
     import pandas as pd
 
-    from slipwave.report import campaign_summary, write_campaign_report
+    from slipwave.campaign_report import campaign_summary, write_campaign_report
 
     comparisons = {}
     for path in args.comparisons:
@@ -311,10 +337,9 @@ def _report_campaign(args: argparse.Namespace) -> None:
 
 
 def _simulate(args: argparse.Namespace) -> None:
-    from slipwave.cache import DiskCache
     from slipwave.io import write_dataset
     from slipwave.resources import require_memory
-    from slipwave.solver import Coulomb, LoadPath, Slab, condense, describe_behaviour, simulate
+    from slipwave.solver import Coulomb, LoadPath, Slab, describe_behaviour, simulate
     from slipwave.solver.slab import condensation_memory
 
     if args.fit is not None:
@@ -331,8 +356,7 @@ def _simulate(args: argparse.Namespace) -> None:
                     normal_friction=args.normal_friction == "on")
     require_memory(condensation_memory(slab), f"simulating a slab of {args.elements} elements "
                    f"and H = {args.height:g} mm", limit_gb=args.memory_limit)
-    result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path,
-                      condensed=condense(slab, store=DiskCache()))
+    result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path, cache=_solver_cache(args))
     behaviour = describe_behaviour(result)
     result.attrs["behaviour"] = behaviour.text
     result.attrs["behaviour_events"] = behaviour.to_json()
@@ -346,18 +370,32 @@ def _simulate(args: argparse.Namespace) -> None:
           f"behaviour: {behaviour.text}")
 
 
+def _check_detection(fit: Mapping[str, Any], detection: DetectionSettings,
+                     path: object) -> None:
+    """Refuse a fit made with other detection settings than the command's."""
+    from slipwave.events import DetectionSettings
+
+    if "detection" in fit and DetectionSettings.from_dict(fit["detection"]) != detection:
+        raise SlipwaveError(f"{path}: fitted with the detection settings {fit['detection']}, "
+                            f"not these ({detection.to_dict()}): fit the test again")
+
+
 def _simulate_test(args: argparse.Namespace) -> None:
-    from slipwave.bench.replay import replay_test, sequence_scatter
-    from slipwave.bench.setup import TestSetup
     from slipwave.fit import chosen_law, read_fit
     from slipwave.io import atomic_output, write_dataset
+    from slipwave.setup import TestSetup
+    from slipwave.simulate import replay_test, sequence_scatter
 
     fit = read_fit(str(args.fit))
+    detection = _detection_settings(args)
+    _check_detection(fit, detection, args.fit)
     setup = TestSetup.from_dict(fit["setup"])
     law, min_drop = chosen_law(fit), float(fit["measured"]["min_drop_n"])
+    cache = _solver_cache(args)
     replay = replay_test(setup, law, elements=int(fit["elements"]),
                          sample_rate=args.sample_rate, min_drop=min_drop,
-                         kymograph=args.contact is not None)
+                         kymograph=args.contact is not None, band_mm=tuple(args.band),
+                         detection=detection, cache=cache)
     write_dataset(replay.recording, args.output)
     if args.contact is not None:
         write_dataset(replay.contact, args.contact)
@@ -368,7 +406,8 @@ def _simulate_test(args: argparse.Namespace) -> None:
     if args.scatter is not None:
         scatter = sequence_scatter(setup, law, elements=int(fit["elements"]),
                                    sample_rate=args.sample_rate, min_drop=min_drop,
-                                   gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+                                   gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"],
+                                   detection=detection, cache=cache)
         with atomic_output(args.scatter) as temporary:
             scatter.to_csv(temporary, index=False, float_format="%.6g")
     print(f"{args.fit} -> {args.output}: {fit['chosen']} "
@@ -380,7 +419,6 @@ def _simulate_test(args: argparse.Namespace) -> None:
 def _map_row(args: argparse.Namespace) -> None:
     from tqdm import tqdm
 
-    from slipwave.cache import DiskCache
     from slipwave.io import write_dataset
     from slipwave.map import friction_grid, map_row, shard
     from slipwave.resources import require_memory
@@ -397,7 +435,7 @@ def _map_row(args: argparse.Namespace) -> None:
     with tqdm(total=frictions.size, desc=f"H/L {args.height_ratio:g}", unit="case",
               mininterval=2.0, file=sys.stderr) as bar:
         row = map_row(args.height_ratio, frictions, elements=args.elements, path=path,
-                      min_size=args.min_zone, store=DiskCache(),
+                      min_size=args.min_zone, cache=_solver_cache(args),
                       progress=lambda done, total: bar.update(1))
     seconds = row["seconds"].values
     condensation = row.attrs.pop("condensation_s")
@@ -427,7 +465,6 @@ def _map_assemble(args: argparse.Namespace) -> None:
 def _map_figures(args: argparse.Namespace) -> None:
     import pandas as pd
 
-    from slipwave.cache import DiskCache
     from slipwave.io import atomic_output, read_dataset
     from slipwave.map import place_tests, representative_cases, simulate_case
     from slipwave.plot import plot_map, plot_zone_histories
@@ -445,8 +482,9 @@ def _map_figures(args: argparse.Namespace) -> None:
     with atomic_output(args.figure) as temporary:
         plot_map(whole, tests).savefig(temporary, dpi=130, format="png")
     if args.zones is not None:
+        cache = _solver_cache(args)
         cases = [(f"{name}: H/L {hl:g}, f {f:.2f}",
-                  simulate_case(whole, float(hl), float(f), store=DiskCache()))
+                  simulate_case(whole, float(hl), float(f), cache=cache))
                  for name, hl, f in representative_cases(whole)[["name", "height_ratio",
                                                                 "friction"]].itertuples(
                                                                     index=False)]
@@ -461,7 +499,8 @@ def _bench(args: argparse.Namespace) -> None:
     from slipwave.bench.generate import read_bench_config, write_campaign
 
     table = write_campaign(read_bench_config(args.config), args.output, seed=args.seed,
-                           progress=not args.quiet, memory_limit_gb=args.memory_limit)
+                           progress=not args.quiet, memory_limit_gb=args.memory_limit,
+                           cache=_solver_cache(args))
     print(f"{args.config} -> {args.output} ({table.name})")
 
 
@@ -470,6 +509,36 @@ def _sawtooth(args: argparse.Namespace) -> None:
 
     for path in write_sawtooth_campaign(args.output, seed=args.seed):
         print(path)
+
+
+def _detection_options() -> argparse.ArgumentParser:
+    """The detection's settings, shared by every command that detects slips."""
+    options = argparse.ArgumentParser(add_help=False)
+    group = options.add_argument_group("detection (the campaign's 'detection' section)")
+    group.add_argument("--threshold", type=_positive_float, default=default.THRESHOLD,
+                       help="default thresholds in noise standard deviations (%(default)s)")
+    group.add_argument("--max-spike", type=int, default=default.MAX_SPIKE,
+                       help="longest spike ignored, samples (%(default)s)")
+    group.add_argument("--max-duration", type=_optional_float, default=default.MAX_DURATION_S,
+                       help="longest drop looked for, s ('none': a tenth of the recording)")
+    group.add_argument("--min-fall-rate", type=_positive_float, default=default.MIN_FALL_RATE,
+                       help="how many times faster than the drive loads T a drop must fall "
+                       "(%(default)s)")
+    group.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
+                       default=default.EDGE_CONVENTION,
+                       help="how the edge sensors read: both along +x, each its edge's outward "
+                       "displacement, or found from the data (%(default)s)")
+    return options
+
+
+def _cache_options() -> argparse.ArgumentParser:
+    """Where a command keeps the slabs' condensations for the next one."""
+    options = argparse.ArgumentParser(add_help=False)
+    options.add_argument("--cache-dir", type=Path,
+                         default=os.environ.get("SLIPWAVE_CACHE_DIR") or None,
+                         help="folder where the slabs' condensed matrices are kept across "
+                         "runs (default: $SLIPWAVE_CACHE_DIR; unset: none kept)")
+    return options
 
 
 def _load_path_arguments(parser: argparse.ArgumentParser, *, normal_control: str,
@@ -500,6 +569,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"slipwave {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    detection, cache = _detection_options(), _cache_options()
 
     ingest = commands.add_parser(
         "ingest", help="read an acquisition CSV, write it as CF netCDF",
@@ -546,7 +616,7 @@ def build_parser() -> argparse.ArgumentParser:
     report.set_defaults(run=_report)
 
     campaign_report = commands.add_parser(
-        "report-campaign", help="write the campaign report (HTML, PDF) over every test")
+        "campaign-report", help="write the campaign report (HTML, PDF) over every test")
     campaign_report.add_argument("--summary", type=Path, required=True,
                                  help="summary CSV of 'slipwave summary'")
     campaign_report.add_argument("--fits", type=Path, default=None,
@@ -557,10 +627,11 @@ def build_parser() -> argparse.ArgumentParser:
     campaign_report.add_argument("--title", default="Campaign", help="the report's title")
     campaign_report.add_argument("-o", "--output", type=Path, required=True, help="HTML")
     campaign_report.add_argument("--pdf", type=Path, default=None, help="also write a PDF")
-    campaign_report.set_defaults(run=_report_campaign)
+    campaign_report.set_defaults(run=_campaign_report)
 
     sim = commands.add_parser(
-        "simulate", help="simulate a bench test with the frictional contact solver",
+        "simulate", parents=[detection, cache],
+        help="simulate a bench test with the frictional contact solver",
         description="Press the flat on the slab, then move it until gross sliding (or up to "
         "--max-travel), and write the zone evolution as netCDF.",
     )
@@ -574,7 +645,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="E, MPa (%(default)s)")
     sim.add_argument("--poisson-ratio", type=float, default=default.POISSON_RATIO,
                      help="nu (%(default)s)")
-    sim.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
+    sim.add_argument("--elements", type=int, default=default.MAP_ELEMENTS,
                      help="elements along the contact (%(default)s)")
     sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
     sim.add_argument("--fs", type=float, default=None,
@@ -586,8 +657,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --fit: also write the zone history and simulated kymograph")
     sim.add_argument("--steps", type=Path, default=None,
                      help="with --fit: also write the solver's steps")
-    sim.add_argument("--sample-rate", type=_positive_float, default=100.0,
+    sim.add_argument("--sample-rate", type=_positive_float, default=default.SAMPLE_RATE_HZ,
                      help="with --fit: sampling rate of the simulated recording, Hz")
+    sim.add_argument("--band", type=float, nargs=2, default=list(default.BAND_MM),
+                     metavar=("LOW", "HIGH"), help="with --fit: the simulated kymograph's band "
+                     "above the interface, mm (the video's; %(default)s)")
     sim.add_argument("--scatter", type=Path, default=None,
                      help="with --fit: also simulate the law at coefficients a load cell's "
                      "calibration apart and write their compared features (CSV), the "
@@ -614,12 +688,13 @@ def build_parser() -> argparse.ArgumentParser:
         "joins the rows and numbers the behaviours; 'map figures' draws the map.",
     )
     steps = mapping.add_subparsers(dest="map_command", required=True, metavar="STEP")
-    row = steps.add_parser("row", help="one H/L, every f")
+    row = steps.add_parser("row", parents=[cache], help="one H/L, every f")
     row.add_argument("--height-ratio", type=_positive_float, required=True, help="H/L")
-    row.add_argument("--frictions", type=_positive_float, nargs=3, default=[0.10, 1.40, 0.01],
+    row.add_argument("--frictions", type=_positive_float, nargs=3,
+                     default=list(default.MAP_FRICTIONS),
                      metavar=("START", "STOP", "STEP"), help="friction coefficients "
                      "(%(default)s)")
-    row.add_argument("--elements", type=int, default=default.CONTACT_ELEMENTS,
+    row.add_argument("--elements", type=int, default=default.MAP_ELEMENTS,
                      help="elements along the contact (%(default)s)")
     row.add_argument("--shard", type=int, default=0,
                      help="which run of --shard-size coefficients of the row, from 0")
@@ -641,7 +716,8 @@ def build_parser() -> argparse.ArgumentParser:
     assemble.add_argument("--legend", type=Path, required=True,
                           help="the behaviours in words (Markdown)")
     assemble.set_defaults(run=_map_assemble)
-    figures = steps.add_parser("figures", help="draw the map and one zone history per "
+    figures = steps.add_parser("figures", parents=[cache],
+                               help="draw the map and one zone history per "
                                "behaviour")
     figures.add_argument("map", type=Path, help="map netCDF of 'slipwave map assemble'")
     figures.add_argument("--figure", type=Path, required=True, help="map figure (PNG)")
@@ -654,7 +730,7 @@ def build_parser() -> argparse.ArgumentParser:
     figures.set_defaults(run=_map_figures)
 
     bench = commands.add_parser(
-        "bench", help="generate a virtual-bench campaign (CSVs, videos, truth)",
+        "bench", parents=[cache], help="generate a virtual-bench campaign (CSVs, videos, truth)",
         description="Simulate each test of CONFIG (YAML: defaults and tests) on the virtual "
         "bench and write its acquisition CSV, video and ground truth.",
     )
@@ -668,7 +744,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.set_defaults(run=_bench)
 
     detect = commands.add_parser(
-        "detect", help="detect partial and gross slips in a recording",
+        "detect", parents=[detection], help="detect partial and gross slips in a recording",
         description="Find the T drops of a recording, classify them by the DG/DD jumps and "
         "write the events (CSV, and netCDF with the phase of every sample and the T/|N| "
         "ratios at gross slips).",
@@ -682,29 +758,17 @@ def build_parser() -> argparse.ArgumentParser:
                         help="smallest T drop, N (default: --threshold x T noise)")
     detect.add_argument("--min-jump", type=float, default=None,
                         help="smallest DG/DD jump, mm (default: --threshold x noise)")
-    detect.add_argument("--threshold", type=float, default=default.THRESHOLD,
-                        help="default thresholds in noise standard deviations (%(default)s)")
-    detect.add_argument("--max-spike", type=int, default=default.MAX_SPIKE,
-                        help="longest spike ignored, samples (%(default)s)")
-    detect.add_argument("--max-duration", type=_optional_float, default=default.MAX_DURATION_S,
-                        help="longest drop looked for, s ('none': a tenth of the recording)")
-    detect.add_argument("--min-fall-rate", type=float, default=default.MIN_FALL_RATE,
-                        help="how many times faster than the drive loads T a drop must fall "
-                        "(%(default)s)")
-    detect.add_argument("--gross-edge-ratio", type=float, default=default.GROSS_EDGE_RATIO,
+    detect.add_argument("--gross-edge-ratio", type=_positive_float,
+                        default=default.GROSS_EDGE_RATIO,
                         help="DG jump / DD jump from which a drop is a gross slip (%(default)s)")
     detect.add_argument("--simulated", type=Path, default=None,
                         help="the test's simulated recording ('slipwave simulate --fit'): its "
                         "gross_edge_ratio, read off the simulated slips, replaces "
                         "--gross-edge-ratio")
-    detect.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
-                        default=default.EDGE_CONVENTION,
-                        help="how the edge sensors read: both along +x, each its edge's outward "
-                        "displacement, or found from the data (%(default)s)")
     detect.set_defaults(run=_detect)
 
     fit = commands.add_parser(
-        "fit", help="fit friction laws to a test through the solver",
+        "fit", parents=[detection, cache], help="fit friction laws to a test through the solver",
         description="Read the test's configuration from its recording and the campaign "
         "table's cells, then fit each friction law on the slip events (T/|N| at gross "
         "slips, their times, slip counts) with 95 %% intervals, and choose by AIC.")
@@ -723,12 +787,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="simulations of each law's local search (%(default)s)")
     fit.add_argument("--load-calibration", type=float, default=default.LOAD_CALIBRATION,
                      help="relative calibration uncertainty of each load cell (%(default)s)")
-    fit.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
-                     default=default.EDGE_CONVENTION, help="as for detect (%(default)s)")
     fit.set_defaults(run=_fit)
 
     compare = commands.add_parser(
-        "compare", help="a test's measurement against its simulation, feature by feature")
+        "compare", parents=[detection],
+        help="a test's measurement against its simulation, feature by feature")
     compare.add_argument("events", type=Path, help="events netCDF of 'slipwave detect'")
     compare.add_argument("--simulated", type=Path, required=True,
                          help="simulated recording of 'slipwave simulate --fit'")

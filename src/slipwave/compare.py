@@ -20,7 +20,8 @@ import pandas as pd
 import xarray as xr
 
 from slipwave.defaults import LOAD_CALIBRATION
-from slipwave.events.detect import detect_events
+from slipwave.errors import SlipwaveError
+from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.video.waves import MIN_EXTENT
 
 COMPARISON_COLUMNS = ("feature", "unit", "measured", "simulated", "scatter", "difference",
@@ -93,7 +94,7 @@ ORIGIN = Feature("first slip: where the first wave began (video)", "mm", 10.0)
 """Where the first wave began: the video's against the simulated zones'."""
 
 SCATTER_STEP = LOAD_CALIBRATION
-"""How far apart the coefficients of :func:`slipwave.bench.replay.sequence_scatter`'s
+"""How far apart the coefficients of :func:`slipwave.simulate.sequence_scatter`'s
 neighbouring simulations are (relative): the load cells' calibration, within which no
 measurement tells two coefficients apart."""
 
@@ -249,8 +250,8 @@ def first_wave(simulation: xr.Dataset, *, min_extent: float = MIN_EXTENT
 
 def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
                  simulation: xr.Dataset | None = None, waves: pd.DataFrame | None = None,
-                 *, min_drop: float | None = None, scatter: pd.DataFrame | None = None
-                 ) -> pd.DataFrame:
+                 *, min_drop: float | None = None, scatter: pd.DataFrame | None = None,
+                 detection: DetectionSettings = DEFAULT_DETECTION) -> pd.DataFrame:
     """Measured against simulated, one row per feature.
 
     A feature agrees when the difference lies within its tolerance: what the
@@ -266,7 +267,7 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
         The test's events (``slipwave detect`` with the simulation's
         ``gross_edge_ratio``).
     simulated_recording
-        The simulated recording (:func:`slipwave.bench.replay.replay_test`), whose
+        The simulated recording (:func:`slipwave.simulate.replay_test`), whose
         attrs carry ``gross_edge_ratio``.
     simulation
         The solver's steps, for where the first wave began and the way gross slips
@@ -277,8 +278,10 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
         The measurement's smallest drop (N), used for the simulated events too.
     scatter
         The features of neighbouring simulations
-        (:func:`slipwave.bench.replay.sequence_scatter`), one row each; ``None``: no
+        (:func:`slipwave.simulate.sequence_scatter`), one row each; ``None``: no
         scatter (the measurement's tolerances alone).
+    detection
+        The detection's settings (the measurement's), for the simulated events.
 
     Returns
     -------
@@ -287,9 +290,12 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
         events.
 
     """
-    simulated = detect_events(simulated_recording, min_drop=min_drop, edge_convention="x_axis",
-                              gross_edge_ratio=float(
-                                  simulated_recording.attrs.get("gross_edge_ratio", 0.9)))
+    if "gross_edge_ratio" not in simulated_recording.attrs:
+        raise SlipwaveError(f"{simulated_recording.attrs.get('source', 'the simulation')}: "
+                            "no gross_edge_ratio: not a recording of 'slipwave simulate --fit'")
+    simulated = detect_events(simulated_recording, **detection.keywords(
+        min_drop=min_drop, edge_convention="x_axis",
+        gross_edge_ratio=float(simulated_recording.attrs["gross_edge_ratio"])))
     measured_values = event_features(measured)
     simulated_values = event_features(simulated)
     origin, way = first_wave(simulation) if simulation is not None else (np.nan, "")

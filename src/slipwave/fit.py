@@ -5,8 +5,11 @@ before and after each gross slip, the first slips' times, the gross slips' recur
 the numbers of gross and partial slips (:func:`feature_residuals`), with the law's own
 cycle of slips as a scatter the fit cannot remove (:data:`SEQUENCE_SIGMA`). Each
 evaluation runs the solver along the test's own load path
-(:meth:`slipwave.bench.setup.TestSetup.bench_test`), so a fit costs tens of
-simulations; they are cached by parameters within a fit. The search is derivative-free
+(:meth:`slipwave.setup.TestSetup.load_path`), so a fit costs tens of simulations;
+they are cached by parameters within a fit, and the slab's condensation and normal
+approach are computed once (:class:`~slipwave.solver.SolverCache`). The measured and
+the simulated recordings go through the same detection, with the campaign's settings
+(:class:`~slipwave.events.DetectionSettings`). The search is derivative-free
 (a scan, then Nelder-Mead): the features are piecewise smooth in the parameters (a
 partial slip more or less changes the history), which finite-difference Jacobians do
 not survive. 95 % intervals join the Gauss-Newton covariance of the residuals' secant
@@ -15,9 +18,9 @@ calibration range added in quadrature to each coefficient's, and the region wher
 misfit rises by less than 3.84, both scaled by the reduced misfit when the law does not
 reach the noise; laws are compared by Akaike's criterion (AIC).
 
-Fitted coefficients belong to the mesh they were fitted with (``elements``): the
+The fitted coefficients depend on the mesh they were fitted with (``elements``): the
 contact's corner concentrates the stress, so T/|N| at a gross slip for a given fs
-changes with the element size (see the README).
+changes with the element size (see the documentation's methods).
 
 Examples
 --------
@@ -39,14 +42,13 @@ import pandas as pd
 import xarray as xr
 from scipy.optimize import minimize
 
-from slipwave.bench.sensors import clean_signals, step_times
-from slipwave.bench.setup import TestSetup
-from slipwave.cache import DiskCache
 from slipwave.compare import recurrence
 from slipwave.defaults import FIT_ELEMENTS, FIT_MAX_EVALUATIONS, LOAD_CALIBRATION
 from slipwave.errors import SlipwaveError
-from slipwave.events.detect import detect_events
-from slipwave.solver import Coulomb, SlipWeakening, condense, simulate
+from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
+from slipwave.setup import TestSetup
+from slipwave.solver import Coulomb, SlipWeakening, SolverCache, simulate
+from slipwave.solver.signals import clean_signals, step_times
 
 LAWS: dict[str, tuple[str, ...]] = {
     "coulomb": ("fs", "fd"),
@@ -193,7 +195,7 @@ def edge_threshold(simulation: xr.Dataset, *, edge_reference: str = "frame") -> 
     simulation
         From :func:`slipwave.solver.simulate` along the test's load path.
     edge_reference
-        ``frame`` or ``flat`` (:data:`slipwave.bench.setup.EDGE_REFERENCES`).
+        ``frame`` or ``flat`` (:data:`slipwave.setup.EDGE_REFERENCES`).
 
     Returns
     -------
@@ -283,7 +285,8 @@ def split_edge_ratios(ratio: np.ndarray, far_jump: np.ndarray, gross: np.ndarray
 
 
 def detected_edge_threshold(simulation: xr.Dataset, setup: TestSetup, *, min_drop: float,
-                            sample_rate: float) -> float:
+                            sample_rate: float,
+                            detection: DetectionSettings = DEFAULT_DETECTION) -> float:
     """The edge threshold read off a simulation's slips as detection sees them.
 
     The simulation goes through the measurement's detection
@@ -300,13 +303,15 @@ def detected_edge_threshold(simulation: xr.Dataset, setup: TestSetup, *, min_dro
     Parameters
     ----------
     simulation
-        From :func:`slipwave.solver.simulate` with the test's bench spec.
+        From :func:`slipwave.solver.simulate` along the test's load path.
     setup
         The test's setup.
     min_drop
         The measurement's smallest drop, N.
     sample_rate
         The card's sampling rate, Hz.
+    detection
+        The detection's settings (the measurement's).
 
     Returns
     -------
@@ -319,7 +324,8 @@ def detected_edge_threshold(simulation: xr.Dataset, setup: TestSetup, *, min_dro
         If no detected event holds a gross slip.
 
     """
-    events = simulated_events(simulation, setup, min_drop=min_drop, sample_rate=sample_rate)
+    events = simulated_events(simulation, setup, min_drop=min_drop, sample_rate=sample_rate,
+                              detection=detection)
     times = step_times(simulation, speed=setup["speed_mm_s"],
                        loading_time=setup["loading_time_s"])
     slips = (simulation["phase"].values == "tangential") & (
@@ -372,15 +378,16 @@ def slip_features(events: pd.DataFrame, *, gross_edge_ratio: float, min_drop: fl
                         events.loc[~gross, "drop"].to_numpy(dtype=float))
 
 
-def measured_events(recording: xr.Dataset, *, edge_convention: str = "auto") -> pd.DataFrame:
+def measured_events(recording: xr.Dataset, *,
+                    detection: DetectionSettings = DEFAULT_DETECTION) -> pd.DataFrame:
     """A recording's events for a fit: every T drop with its loads and edge jumps.
 
     Parameters
     ----------
     recording
         From :func:`slipwave.io.read_acquisition`.
-    edge_convention
-        Passed to :func:`~slipwave.events.detect_events`.
+    detection
+        The detection's settings (the detect stage's).
 
     Returns
     -------
@@ -394,7 +401,7 @@ def measured_events(recording: xr.Dataset, *, edge_convention: str = "auto") -> 
         If the recording has no slip, no N (T/|N| unknown) or no DG/DD.
 
     """
-    events = detect_events(recording, edge_convention=edge_convention)
+    events = detect_events(recording, **detection.keywords())
     source = recording.attrs.get("test_id", recording.attrs.get("source", "the recording"))
     if events.empty:
         raise SlipwaveError(f"test {source!r}: no slip in the recording, nothing to fit")
@@ -410,11 +417,12 @@ def measured_events(recording: xr.Dataset, *, edge_convention: str = "auto") -> 
 
 
 def simulated_events(simulation: xr.Dataset, setup: TestSetup, *, min_drop: float,
-                     sample_rate: float) -> pd.DataFrame:
+                     sample_rate: float,
+                     detection: DetectionSettings = DEFAULT_DETECTION) -> pd.DataFrame:
     """A simulation's events, detected as the measurement's are.
 
     The simulation becomes a noise-free recording sampled like the test
-    (:func:`slipwave.bench.sensors.clean_signals`, its edges in the test's edge
+    (:func:`slipwave.solver.signals.clean_signals`, its edges in the test's edge
     reference) and goes through the same detection, so that what detection does to a
     slip (a trough read as the reloading starts, a peak between samples) is on both
     sides of the comparison.
@@ -422,13 +430,16 @@ def simulated_events(simulation: xr.Dataset, setup: TestSetup, *, min_drop: floa
     Parameters
     ----------
     simulation
-        From :func:`slipwave.solver.simulate` with the test's bench spec.
+        From :func:`slipwave.solver.simulate` along the test's load path.
     setup
         The test's setup (speed, normal loading time, duration, edge reference).
     min_drop
         The measurement's smallest drop, N.
     sample_rate
         The card's sampling rate, Hz.
+    detection
+        The detection's settings (the measurement's; a simulated recording's edges
+        read along +x).
 
     Returns
     -------
@@ -438,7 +449,8 @@ def simulated_events(simulation: xr.Dataset, setup: TestSetup, *, min_drop: floa
     """
     recording = simulated_recording(simulation, setup, sample_rate=sample_rate)
     recording.attrs["test_id"] = setup.test_id
-    return detect_events(recording, min_drop=min_drop, edge_convention="x_axis")
+    return detect_events(recording, **detection.keywords(min_drop=min_drop,
+                                                          edge_convention="x_axis"))
 
 
 def simulated_recording(simulation: xr.Dataset, setup: TestSetup, *,
@@ -453,7 +465,7 @@ def simulated_recording(simulation: xr.Dataset, setup: TestSetup, *,
     Returns
     -------
     xarray.Dataset
-        T, N, DG, DD, DT against time (:func:`slipwave.bench.sensors.clean_signals`),
+        T, N, DG, DD, DT against time (:func:`slipwave.solver.signals.clean_signals`),
         the edges read against the flat when the test's sensors are.
 
     """
@@ -738,8 +750,11 @@ class _Objective:
     """
 
     def __init__(self, setup: TestSetup, measured: pd.DataFrame, law: str, elements: int,
-                 threshold: float, calibration_error: float):
+                 threshold: float, calibration_error: float, detection: DetectionSettings,
+                 cache: SolverCache):
         self.setup, self.law, self.elements = setup, law, elements
+        self.detection, self.cache_of_solver = detection, cache
+        self.slab, self.path = setup.slab(elements), setup.load_path()
         self.calibration_error = calibration_error
         self.names = LAWS[law]
         self.sizes = {"min_drop": float(measured.attrs.get("min_drop", 0.0)),
@@ -750,8 +765,6 @@ class _Objective:
         self.history: list[tuple[tuple[float, ...], float]] = []
         self.features: dict[tuple[float, ...], SlipFeatures] = {}
         self.cache: dict[tuple[float, ...], float] = {}
-        spec = setup.bench_test(Coulomb(fs=1.0), elements=elements)
-        self.condensed = condense(spec.slab(), store=DiskCache())
 
     def clip(self, theta: Sequence[float]) -> tuple[float, ...]:
         values = dict(zip(self.names, (float(v) for v in theta), strict=True))
@@ -766,11 +779,11 @@ class _Objective:
 
     def simulated(self, theta: tuple[float, ...]) -> SlipFeatures:
         params = dict(zip(self.names, theta, strict=True))
-        spec = self.setup.bench_test(law_of(self.law, params), elements=self.elements)
-        simulation = simulate(spec.slab(), spec.friction(), spec.load_path(),
-                              condensed=self.condensed)
+        simulation = simulate(self.slab, law_of(self.law, params), self.path,
+                              cache=self.cache_of_solver)
         events = simulated_events(simulation, self.setup, min_drop=self.sizes["min_drop"],
-                                  sample_rate=self.sizes["sample_rate"])
+                                  sample_rate=self.sizes["sample_rate"],
+                                  detection=self.detection)
         return slip_features(events, gross_edge_ratio=self.threshold, **self.sizes)
 
     def __call__(self, theta: Sequence[float]) -> float:
@@ -792,7 +805,9 @@ class _Objective:
 def law_misfit(setup: TestSetup, measured: pd.DataFrame, law: str,
                params: Mapping[str, float], *, threshold: float,
                elements: int = FIT_ELEMENTS,
-               calibration_error: float = LOAD_CALIBRATION) -> float:
+               calibration_error: float = LOAD_CALIBRATION,
+               detection: DetectionSettings = DEFAULT_DETECTION,
+               cache: SolverCache | None = None) -> float:
     """The misfit the fit gives one law's parameters on one test (one simulation).
 
     To tell, where a fit misses a known truth, a search that stopped short (the truth's
@@ -800,7 +815,7 @@ def law_misfit(setup: TestSetup, measured: pd.DataFrame, law: str,
 
     Parameters
     ----------
-    setup, measured, law, threshold, elements, calibration_error
+    setup, measured, law, threshold, elements, calibration_error, detection, cache
         As for :func:`fit_law`.
     params
         The law's parameters by name (:data:`LAWS`).
@@ -812,7 +827,8 @@ def law_misfit(setup: TestSetup, measured: pd.DataFrame, law: str,
         solver cannot follow the law.
 
     """
-    objective = _Objective(setup, measured, law, elements, threshold, calibration_error)
+    objective = _Objective(setup, measured, law, elements, threshold, calibration_error,
+                           detection, cache or SolverCache())
     return objective(tuple(float(params[name]) for name in LAWS[law]))
 
 
@@ -978,13 +994,15 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
             max_evaluations: int = FIT_MAX_EVALUATIONS,
             previous: Mapping[str, LawFit] | None = None,
             scan: Mapping[tuple[float, ...], SlipFeatures] | None = None,
-            calibration_error: float = LOAD_CALIBRATION) -> LawFit:
+            calibration_error: float = LOAD_CALIBRATION,
+            detection: DetectionSettings = DEFAULT_DETECTION,
+            cache: SolverCache | None = None) -> LawFit:
     """Fit one friction law to one test.
 
     Parameters
     ----------
     setup
-        The test's configuration (:func:`slipwave.bench.setup.read_test_setup`).
+        The test's configuration (:func:`slipwave.setup.read_test_setup`).
     measured
         Its events (:func:`measured_events`).
     law
@@ -1001,6 +1019,11 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
         Coulomb's simulated features by parameters, for the run-in's start.
     calibration_error
         Relative calibration uncertainty of each load cell (:data:`LOAD_CALIBRATION`).
+    detection
+        The detection's settings, for the simulated recordings.
+    cache
+        The solver's cache (the slab's condensation and normal approach); ``None``: the
+        fit's own.
 
     Returns
     -------
@@ -1014,7 +1037,8 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
 
     """
     began = clock.perf_counter()
-    objective = _Objective(setup, measured, law, elements, threshold, calibration_error)
+    objective = _Objective(setup, measured, law, elements, threshold, calibration_error,
+                           detection, cache or SolverCache())
     starts = _starts(law, objective, measured, previous or {}, scan or {})
     best = min(starts, key=objective)
     if law == "coulomb":
@@ -1111,7 +1135,9 @@ def _nearby(objective: _Objective) -> tuple[tuple[float, ...], tuple[float, floa
 
 
 def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *,
-                    elements: int = FIT_ELEMENTS) -> float:
+                    elements: int = FIT_ELEMENTS,
+                    detection: DetectionSettings = DEFAULT_DETECTION,
+                    cache: SolverCache | None = None) -> float:
     """The test's edge threshold from one Coulomb run at plausible coefficients.
 
     What separates a gross slip's edge jumps from a partial slip's is the slab's shape
@@ -1120,7 +1146,7 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *,
 
     Parameters
     ----------
-    setup, measured, elements
+    setup, measured, elements, detection, cache
         As in :func:`fit_law`.
 
     Returns
@@ -1130,12 +1156,12 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *,
 
     """
     fd = _fd_start(measured)
-    spec = setup.bench_test(Coulomb(fs=fd + 0.3, fd=fd), elements=elements)
-    simulation = simulate(spec.slab(), spec.friction(), spec.load_path(),
-                          condensed=condense(spec.slab(), store=DiskCache()))
+    simulation = simulate(setup.slab(elements), Coulomb(fs=fd + 0.3, fd=fd),
+                          setup.load_path(), cache=cache)
     return detected_edge_threshold(simulation, setup,
                                    min_drop=float(measured.attrs.get("min_drop", 0.0)),
-                                   sample_rate=float(measured.attrs["sample_rate"]))
+                                   sample_rate=float(measured.attrs["sample_rate"]),
+                                   detection=detection)
 
 
 def _intervals(history: list[tuple[tuple[float, ...], float]], best: tuple[float, ...],
@@ -1218,7 +1244,9 @@ def _intervals(history: list[tuple[tuple[float, ...], float]], best: tuple[float
 
 def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = tuple(LAWS),
              elements: int = FIT_ELEMENTS, max_evaluations: int = FIT_MAX_EVALUATIONS,
-             calibration_error: float = LOAD_CALIBRATION) -> dict[str, Any]:
+             calibration_error: float = LOAD_CALIBRATION,
+             detection: DetectionSettings = DEFAULT_DETECTION,
+             cache: SolverCache | None = None) -> dict[str, Any]:
     """Fit every law to a test and choose by AIC.
 
     Parameters
@@ -1227,13 +1255,16 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
         As in :func:`fit_law`.
     laws
         The laws to fit (Coulomb first: the others start from it).
-    elements, max_evaluations, calibration_error
+    elements, max_evaluations, calibration_error, detection
         As in :func:`fit_law`.
+    cache
+        The solver's cache, shared by every law's simulations; ``None``: the fit's own.
 
     Returns
     -------
     dict
         ``test_id``, ``setup`` (every value with its source), ``elements``,
+        ``detection`` (:meth:`~slipwave.events.DetectionSettings.to_dict`),
         ``measured`` (gross and partial slip counts), ``laws`` (each
         :meth:`LawFit.to_dict` with ``delta_aic`` and ``rejected``), ``chosen`` (the
         lowest AIC) and ``parameters`` (the chosen law's values).
@@ -1244,12 +1275,15 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
         raise SlipwaveError(f"unknown friction law(s) {unknown}; known: {', '.join(LAWS)}")
     ordered = sorted(laws, key=list(LAWS).index)
     fits: dict[str, LawFit] = {}
-    threshold = probe_threshold(setup, measured, elements=elements)
+    cache = cache or SolverCache()
+    threshold = probe_threshold(setup, measured, elements=elements, detection=detection,
+                                cache=cache)
     for law in ordered:
         scan = fits["coulomb"].features_by_parameters if "coulomb" in fits else None
         fits[law] = fit_law(setup, measured, law, threshold=threshold, elements=elements,
                             max_evaluations=max_evaluations, previous=fits, scan=scan,
-                            calibration_error=calibration_error)
+                            calibration_error=calibration_error, detection=detection,
+                            cache=cache)
     best = min(fits.values(), key=lambda fit: fit.aic)
     laws_out = {}
     for law, fit in fits.items():
@@ -1258,7 +1292,7 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
         entry["rejected"] = bool(fit.aic - best.aic > REJECTED_AIC)
         laws_out[law] = entry
     return {"test_id": setup.test_id, "setup": setup.to_dict(), "elements": elements,
-            "load_calibration": calibration_error,
+            "detection": detection.to_dict(), "load_calibration": calibration_error,
             "measured": {"slips": len(measured),
                          "gross_slips": len(slip_features(
                              measured, gross_edge_ratio=threshold, min_drop=0.0,
@@ -1308,41 +1342,3 @@ def read_fit(path: str) -> dict[str, Any]:
     if not isinstance(fit, dict) or "chosen" not in fit or "parameters" not in fit:
         raise SlipwaveError(f"{path}: not a fit (no 'chosen' law and 'parameters')")
     return fit
-
-
-def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
-    """The campaign's fits, one row per test.
-
-    Parameters
-    ----------
-    fits
-        ``fit.json`` contents (:func:`fit_test`).
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``test_id``, ``height_ratio``, ``law`` (chosen), ``gross_slips``, each
-        parameter of each law as ``<law>_<name>``, ``_low``, ``_high``, each law's
-        ``<law>_delta_aic``, and the chosen law's ``fs``, ``fd`` with their intervals.
-
-    """
-    rows = []
-    for fit in fits:
-        setup = fit["setup"]
-        row: dict[str, Any] = {
-            "test_id": fit["test_id"],
-            "height_ratio": setup["height_mm"]["value"] / setup["length_mm"]["value"],
-            "law": fit["chosen"], "gross_slips": fit["measured"]["gross_slips"]}
-        chosen = fit["laws"][fit["chosen"]]["parameters"]
-        for name in ("fs", "fd"):
-            row[name] = chosen[name]["value"]
-            row[f"{name}_low"], row[f"{name}_high"] = chosen[name]["low"], chosen[name]["high"]
-        for law, entry in fit["laws"].items():
-            key = law.replace("-", "_")
-            row[f"{key}_delta_aic"] = entry["delta_aic"]
-            for name, value in entry["parameters"].items():
-                row[f"{key}_{name}"] = value["value"]
-                row[f"{key}_{name}_low"] = value["low"]
-                row[f"{key}_{name}_high"] = value["high"]
-        rows.append(row)
-    return pd.DataFrame(rows)

@@ -22,33 +22,32 @@ import xarray as xr
 
 from slipwave import __version__
 from slipwave.defaults import (
-    CONTACT_ELEMENTS,
     CONTACT_LENGTH_MM,
     CONVENTIONS,
+    MAP_ELEMENTS,
+    MAP_FRICTIONS,
+    MAP_HEIGHT_RATIOS,
     MAP_NORMAL_CONTROL,
     MAP_NORMAL_FRICTION,
     MIN_ZONE_MM,
 )
 from slipwave.errors import SlipwaveError
-from slipwave.solver import Coulomb, LoadPath, Slab, condense, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, condense, simulate
 from slipwave.solver.behaviour import ZD, ZG, describe_behaviour
-from slipwave.solver.slab import CondensationStore
 
-PAPER_FRICTIONS = tuple(round(0.10 + 0.01 * k, 2) for k in range(131))
-"""The paper's friction coefficients, 0.10..1.40 step 0.01."""
-PAPER_HEIGHT_RATIOS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2, 1.5)
-"""The paper's slab slendernesses H/L."""
+PAPER_HEIGHT_RATIOS = MAP_HEIGHT_RATIOS
+"""The paper's slab slendernesses H/L (the map's default)."""
 
 
 def map_row(
     height_ratio: float,
     frictions: Sequence[float] | np.ndarray,
     *,
-    elements: int = CONTACT_ELEMENTS,
+    elements: int = MAP_ELEMENTS,
     length: float = CONTACT_LENGTH_MM,
     path: LoadPath | None = None,
     min_size: float = MIN_ZONE_MM,
-    store: CondensationStore | None = None,
+    cache: SolverCache | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> xr.Dataset:
     """One row of the map: every friction coefficient at one H/L.
@@ -68,8 +67,9 @@ def map_row(
         setting), a frictionless approach, 2 N steps.
     min_size
         Shortest zone that decides anything, mm.
-    store
-        Where condensed matrices are kept between processes, or ``None``.
+    cache
+        Where the slab's condensation and normal approach are kept (computed once for
+        the row); ``None``: a cache of the row's own.
     progress
         Called with (cases done, cases) after each case.
 
@@ -95,13 +95,14 @@ def map_row(
                             normal_friction=MAP_NORMAL_FRICTION)
     slab = Slab(length=length, height=height_ratio * length, elements=elements)
     started = time.perf_counter()
-    condensed = condense(slab, store=store)
+    cache = cache or SolverCache()
+    condense(slab, cache=cache)
     condensation = time.perf_counter() - started
     rows = []
     for k, friction in enumerate(frictions):
         started = time.perf_counter()
         try:
-            ds = simulate(slab, Coulomb(fs=float(friction)), path, condensed=condensed)
+            ds = simulate(slab, Coulomb(fs=float(friction)), path, cache=cache)
         except SlipwaveError as err:
             raise SlipwaveError(f"map case H/L {height_ratio:g}, f {friction:g}: {err}") from err
         behaviour = describe_behaviour(ds, min_size=min_size)
@@ -440,7 +441,7 @@ def representative_cases(whole: xr.Dataset) -> pd.DataFrame:
 
 
 def simulate_case(whole: xr.Dataset, height_ratio: float, friction: float, *,
-                  store: CondensationStore | None = None) -> xr.Dataset:
+                  cache: SolverCache | None = None) -> xr.Dataset:
     """Run one case of a map again, with the map's settings (for its zone history).
 
     Parameters
@@ -449,8 +450,8 @@ def simulate_case(whole: xr.Dataset, height_ratio: float, friction: float, *,
         From :func:`assemble_map` (its attributes give the settings).
     height_ratio, friction
         The case.
-    store
-        Where condensed matrices are kept between processes, or ``None``.
+    cache
+        Where the slab's condensation is looked up and kept; ``None``: computed afresh.
 
     Returns
     -------
@@ -466,7 +467,7 @@ def simulate_case(whole: xr.Dataset, height_ratio: float, friction: float, *,
                     tangential_step=float(attrs["tangential_step_N"]),
                     normal_control=str(attrs["normal_control"]),  # type: ignore[arg-type]
                     normal_friction=bool(int(attrs["normal_friction"])))
-    return simulate(slab, Coulomb(fs=friction), path, condensed=condense(slab, store=store))
+    return simulate(slab, Coulomb(fs=friction), path, cache=cache)
 
 
 def place_tests(summary: pd.DataFrame, height_ratios: dict[str, float | str]) -> pd.DataFrame:
@@ -527,6 +528,9 @@ def behaviour_legend(whole: xr.Dataset) -> str:
                      f"{whole['behaviours'].values[k]}")
     return "\n".join(lines)
 
+
+PAPER_FRICTIONS = tuple(friction_grid(*MAP_FRICTIONS).tolist())
+"""The paper's friction coefficients (the map's default grid), 0.10..1.40 step 0.01."""
 
 __all__ = [
     "PAPER_FRICTIONS",

@@ -505,7 +505,7 @@ def plot_fits(table: pd.DataFrame) -> Figure:
     Parameters
     ----------
     table
-        From :func:`slipwave.fit.fits_table`.
+        From :func:`slipwave.fits.fits_table`.
 
     Returns
     -------
@@ -792,7 +792,7 @@ def plot_campaign(summary: pd.DataFrame, fits: pd.DataFrame) -> Figure:
     summary
         ``results/summary.csv``.
     fits
-        ``results/fits.csv`` (:func:`slipwave.fit.fits_table`).
+        ``results/fits.csv`` (:func:`slipwave.fits.fits_table`).
 
     Returns
     -------

@@ -1,4 +1,4 @@
-"""The report stage: HTML pages of tests, from the workflow's results."""
+"""The report stage: the HTML and PDF page of a test, from the workflow's results."""
 
 from __future__ import annotations
 
@@ -43,12 +43,25 @@ SETTING_MEANINGS = {
 """What each setting of a test's configuration is, and its unit."""
 
 
-def _environment() -> jinja2.Environment:
+def page_template(name: str) -> jinja2.Template:
+    """A page template shipped with slipwave, its values HTML-escaped.
+
+    Parameters
+    ----------
+    name
+        The file in ``slipwave/templates`` (e.g. ``"test_page.html.j2"``).
+
+    Returns
+    -------
+    jinja2.Template
+        The template; an undefined value is an error, not an empty string.
+
+    """
     return jinja2.Environment(
         loader=jinja2.PackageLoader("slipwave", "templates"),
         autoescape=jinja2.select_autoescape(["html", "j2"]),
         undefined=jinja2.StrictUndefined,
-    )
+    ).get_template(name)
 
 
 def channel_summary(recording: xr.Dataset) -> list[dict[str, Any]]:
@@ -211,7 +224,20 @@ def _number(value: Any) -> Any:
     return value
 
 
-def _png(fig: Figure) -> str:
+def png_base64(fig: Figure) -> str:
+    """A figure as a PNG in base64, to embed in a page.
+
+    Parameters
+    ----------
+    fig
+        The figure.
+
+    Returns
+    -------
+    str
+        The PNG file's content, base64-encoded.
+
+    """
     return base64.b64encode(figure_png(fig)).decode("ascii")
 
 
@@ -404,7 +430,7 @@ def render_test_page(recording: xr.Dataset, events: xr.Dataset | None = None,
         k: v for k, v in attrs.items()
         if k not in {"warnings", "Conventions", "source_sha256", "source", "source_format"}
     }
-    return _environment().get_template("test_page.html.j2").render(
+    return page_template("test_page.html.j2").render(
         test_id=attrs.get("test_id", attrs.get("source", "test")),
         source=attrs.get("source", ""),
         sha256=attrs.get("source_sha256", ""),
@@ -476,95 +502,6 @@ def write_test_page(
 
     """
     html = render_test_page(recording, events, video, pairing, workers=workers)
-    if pdf is not None:
-        write_pdf(html, pdf)
-    with atomic_output(path) as temporary:
-        temporary.write_text(html, encoding="utf-8")
-    return Path(path)
-
-
-def campaign_summary(summary: pd.DataFrame, fits: pd.DataFrame | None,
-                     comparisons: dict[str, dict[str, Any]],
-                     behaviour_map: xr.Dataset | None = None) -> dict[str, Any]:
-    """The campaign report's content: one row per test, the figures over the tests.
-
-    Parameters
-    ----------
-    summary
-        ``results/summary.csv`` (:func:`slipwave.events.summary_row` per test).
-    fits
-        ``results/fits.csv`` (:func:`slipwave.fit.fits_table`), or ``None``.
-    comparisons
-        Each test's ``comparison.json`` by test id (verdict counts, place on the map).
-    behaviour_map
-        ``map.nc``, or ``None``.
-
-    Returns
-    -------
-    dict
-        ``tests`` (rows), ``figures`` (base64 PNG) and ``missing``.
-
-    """
-    from slipwave.plot import plot_campaign
-
-    rows = []
-    fitted = fits.set_index("test_id") if fits is not None and len(fits) else None
-    for _, test in summary.iterrows():
-        test_id = str(test["test_id"])
-        row: dict[str, Any] = {"test_id": test_id, **{
-            key: test.get(key) for key in ("gross_slip_waves", "partial_slip_waves",
-                                           "static_ratio_mean", "static_ratio_ci_low",
-                                           "static_ratio_ci_high", "dynamic_ratio_mean")}}
-        if fitted is not None and test_id in fitted.index:
-            fit = fitted.loc[test_id]
-            row.update(height_ratio=fit["height_ratio"], law=fit["law"],
-                       fs=fit["fs"], fs_low=fit["fs_low"], fs_high=fit["fs_high"],
-                       fd=fit["fd"], fd_low=fit["fd_low"], fd_high=fit["fd_high"])
-        compared = comparisons.get(test_id, {})
-        row["verdicts"] = compared.get("verdicts", {})
-        row["behaviour"] = (compared.get("map") or {}).get("behaviour", "")
-        rows.append(row)
-    missing = []
-    figures: dict[str, str | None] = {"fits": None, "map": None}
-    if fitted is not None and fits is not None:
-        figures["fits"] = _png(plot_campaign(summary, fits))
-    else:
-        missing.append("no fits: the tests were not fitted")
-    if behaviour_map is not None and fitted is not None:
-        tests = pd.DataFrame({"test_id": fitted.index, "height_ratio": fitted["height_ratio"],
-                              "ratio": fitted["fs"], "ci_low": fitted["fs_low"],
-                              "ci_high": fitted["fs_high"]})
-        figures["map"] = _png(plot_map(behaviour_map, tests.reset_index(drop=True),
-                                       label="tests (fitted fs, 95 % interval)"))
-    else:
-        missing.append("no behaviour map with the tests")
-    return {"tests": rows, "figures": figures, "missing": missing}
-
-
-def write_campaign_report(content: dict[str, Any], path: str | PathLike[str], *,
-                          pdf: str | PathLike[str] | None = None,
-                          title: str = "Campaign") -> Path:
-    """Write the campaign report (HTML, and PDF), whole or not at all.
-
-    Parameters
-    ----------
-    content
-        From :func:`campaign_summary`.
-    path
-        The HTML file.
-    pdf
-        Also print it to this PDF; ``None``: no PDF.
-    title
-        The report's title.
-
-    Returns
-    -------
-    Path
-        The page written.
-
-    """
-    html = _environment().get_template("campaign.html.j2").render(
-        title=title, version=__version__, **content)
     if pdf is not None:
         write_pdf(html, pdf)
     with atomic_output(path) as temporary:

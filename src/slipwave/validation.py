@@ -23,6 +23,23 @@ from slipwave.errors import ConfigError
 
 
 @functools.cache
+def schema_path(name: str) -> Path:
+    """Where a schema shipped with slipwave lies (the workflow validates against it).
+
+    Parameters
+    ----------
+    name
+        Its file name without ``.schema.json`` (``"config"``, ``"tests"``, ``"bench"``).
+
+    Returns
+    -------
+    Path
+        The file, inside the installed package.
+
+    """
+    return Path(str(resources.files("slipwave").joinpath(f"schemas/{name}.schema.json")))
+
+
 def load_schema(name: str) -> dict[str, Any]:
     """A schema shipped with slipwave.
 
@@ -37,8 +54,7 @@ def load_schema(name: str) -> dict[str, Any]:
         The schema.
 
     """
-    text = resources.files("slipwave").joinpath(f"schemas/{name}.schema.json").read_text()
-    return dict(json.loads(text))
+    return dict(json.loads(schema_path(name).read_text()))
 
 
 def describe_path(path: Sequence[str | int], document: Any = None) -> str:

@@ -1,5 +1,6 @@
 # Input and parameter functions shared by the rules: lookups in the campaign
-# table, no logic (that lives in slipwave.campaign).
+# table and the config, no logic (that lives in slipwave.campaign).
+import shlex
 
 
 def scaled_memory(megabytes):
@@ -47,9 +48,9 @@ def frame_rate_option(wildcards):
 def video_options(wildcards, input):
     if "kymograph" not in input.keys():
         return ""
-    return (
-        f"--kymograph {input.kymograph} --waves {input.waves} --fused {input.fused} "
-        f"--clock {input.clock} --frames {input.frames}"
+    return " ".join(
+        f"--{name} {shlex.quote(str(input[name]))}"
+        for name in ("kymograph", "waves", "fused", "clock", "frames")
     )
 
 
@@ -89,15 +90,28 @@ def detect_inputs(wildcards):
 
 def threshold_option(wildcards, input):
     if "simulated" in input.keys():
-        return f"--simulated {input.simulated}"
+        return f"--simulated {shlex.quote(str(input.simulated))}"
     return f"--gross-edge-ratio {config['detection']['gross_edge_ratio']}"
+
+
+def detection_options(wildcards):
+    """The campaign's detection settings, the same for every stage that detects slips."""
+    settings = config["detection"]
+    convention = edge_convention(config, test_row(wildcards))
+    return (
+        f"--threshold {settings['threshold']} --max-spike {settings['max_spike']} "
+        f"--max-duration {settings['max_duration']} "
+        f"--min-fall-rate {settings['min_fall_rate']} --edge-convention {convention}"
+    )
 
 
 def pairing_options(wildcards, input):
     names = ("fit", "comparison", "comparison_json", "simulated", "simulated_events",
              "contact", "map")
     return " ".join(
-        f"--{name.replace('_', '-')} {input[name]}" for name in names if name in input.keys()
+        f"--{name.replace('_', '-')} {shlex.quote(str(input[name]))}"
+        for name in names
+        if name in input.keys()
     )
 
 
@@ -115,5 +129,8 @@ def campaign_report_inputs(wildcards):
 def campaign_options(wildcards, input):
     if "fits" not in input.keys():
         return ""
-    comparisons = " ".join(str(path) for path in input.comparisons)
-    return f"--fits {input.fits} --comparisons {comparisons} --map {input.map}"
+    comparisons = " ".join(shlex.quote(str(path)) for path in input.comparisons)
+    return (
+        f"--fits {shlex.quote(str(input.fits))} --comparisons {comparisons} "
+        f"--map {shlex.quote(str(input.map))}"
+    )

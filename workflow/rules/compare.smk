@@ -14,7 +14,10 @@ rule compare:
     log:
         "results/logs/compare/{test_id}.log",
     params:
-        waves=lambda wildcards, input: f"--waves {input.waves}" if "waves" in input.keys() else "",
+        waves=lambda wildcards, input: (
+            f"--waves {shlex.quote(str(input.waves))}" if "waves" in input.keys() else ""
+        ),
+        detection=detection_options,
     threads: 1
     resources:
         mem_mb=scaled_memory(1500),
@@ -25,4 +28,4 @@ rule compare:
         "slipwave compare {input.events:q} --simulated {input.simulated:q} "
         "--steps {input.steps:q} --scatter {input.scatter:q} --fit {input.fit:q} {params.waves} --map {input.map:q} "
         "-o {output.table:q} --json {output.summary:q} "
-        "--simulated-events {output.simulated_events:q} > {log:q} 2>&1"
+        "--simulated-events {output.simulated_events:q} {params.detection} > {log:q} 2>&1"

@@ -30,7 +30,7 @@ rule map_row:
         "-o {output:q} > {log:q} 2>&1"
 
 
-rule map:
+rule map_assemble:
     """The map: map.nc (H/L x f: behaviour, succession, L, first events, T/N), map.csv, legend."""
     input:
         MAP_SHARD_FILES,

@@ -11,6 +11,9 @@ rule simulate:
         scatter="results/{test_id}/simulated/scatter.csv",
     log:
         "results/logs/simulate/{test_id}.log",
+    params:
+        band=config["video"]["band_mm"],
+        detection=detection_options,
     threads: 1
     resources:
         mem_mb=scaled_memory(1500),
@@ -20,4 +23,5 @@ rule simulate:
     shell:
         "slipwave simulate --fit {input:q} -o {output.recording:q} "
         "--contact {output.contact:q} --steps {output.steps:q} --scatter {output.scatter:q} "
+        "--band {params.band[0]} {params.band[1]} {params.detection} "
         "> {log:q} 2>&1"

@@ -3,25 +3,29 @@
 - :mod:`slipwave.bench.generate`: one test (:class:`BenchTest`,
   :func:`simulate_test`, :func:`write_test`) or a campaign
   (:func:`write_campaign`, the ``slipwave bench`` command), with the truth.
-- :mod:`slipwave.bench.sensors`: a machine-driven simulation sampled like the
-  card, and the sensor model.
-- :mod:`slipwave.bench.camera`: stresses of the slab at the camera's pixels,
-  isochromatic frames, video files.
+- :mod:`slipwave.bench.sensors`: what real sensors add to the noise-free signals
+  of :mod:`slipwave.solver.signals`.
+- :mod:`slipwave.bench.camera`: the frames of :mod:`slipwave.photoelastic` written
+  as video files or image sequences.
+- :mod:`slipwave.bench.sawtooth`: a synthetic sawtooth recording with known events.
+
+The bench builds on the analysis's modules (:mod:`slipwave.setup`,
+:mod:`slipwave.solver`); nothing that analyses a test imports it.
 """
 
-from slipwave.bench.camera import Camera, Photoelastic, write_video
+from slipwave.bench.camera import write_video
 from slipwave.bench.generate import (
     BenchResult,
     BenchTest,
     load_tests,
+    setup_bench_test,
     simulate_test,
     write_campaign,
     write_test,
 )
-from slipwave.bench.sensors import DEFAULT_SENSORS, Sensor, apply_sensors, clean_signals
+from slipwave.bench.sensors import DEFAULT_SENSORS, Sensor, apply_sensors
 
 __all__ = [
-    "DEFAULT_SENSORS", "BenchResult", "BenchTest", "Camera", "Photoelastic", "Sensor",
-    "apply_sensors", "clean_signals", "load_tests", "simulate_test", "write_campaign",
-    "write_test", "write_video",
+    "DEFAULT_SENSORS", "BenchResult", "BenchTest", "Sensor", "apply_sensors", "load_tests",
+    "setup_bench_test", "simulate_test", "write_campaign", "write_test", "write_video",
 ]

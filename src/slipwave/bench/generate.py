@@ -23,29 +23,27 @@ import pandas as pd
 import xarray as xr
 from tqdm import tqdm
 
-from slipwave.bench.camera import Camera, Photoelastic, write_image_sequence, write_video
-from slipwave.bench.sensors import (
-    DEFAULT_SENSORS,
-    apply_sensors,
-    clean_signals,
-    step_progress,
-    wave_windows,
-)
-from slipwave.cache import DiskCache
+from slipwave.bench.camera import write_image_sequence, write_video
+from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors
 from slipwave.defaults import (
     BAND_MM,
-    CONTACT_ELEMENTS,
+    BENCH_ELEMENTS,
     CONTACT_LENGTH_MM,
     CONVENTIONS,
     POISSON_RATIO,
+    SAMPLE_RATE_HZ,
     SLAB_HEIGHT_MM,
     SLAB_WIDTH_MM,
+    TRAVEL_STEP_MM,
     YOUNGS_MODULUS_MPA,
 )
 from slipwave.errors import SlipwaveError
 from slipwave.io import atomic_output, write_acquisition
+from slipwave.photoelastic import Camera, Photoelastic
 from slipwave.resources import require_memory
-from slipwave.solver import Coulomb, LoadPath, Slab, SlipWeakening, condense, simulate
+from slipwave.setup import TestSetup, driven_load_path
+from slipwave.solver import Coulomb, LoadPath, Slab, SlipWeakening, SolverCache, simulate
+from slipwave.solver.signals import clean_signals, step_progress, wave_windows
 from slipwave.solver.slab import condensation_memory
 from slipwave.validation import check, load_schema, read_yaml
 
@@ -75,7 +73,7 @@ class BenchTest:
     width: float = SLAB_WIDTH_MM
     youngs_modulus: float = YOUNGS_MODULUS_MPA
     poisson_ratio: float = POISSON_RATIO
-    elements: int = CONTACT_ELEMENTS
+    elements: int = BENCH_ELEMENTS
     fs: float = 0.9
     fd: float = 0.6
     fs_final: float | None = 1.3
@@ -86,9 +84,9 @@ class BenchTest:
     duration: float = 280.0
     loading_time: float = 10.0
     machine_stiffness: float = 40.0
-    travel_step: float = 0.03
+    travel_step: float = TRAVEL_STEP_MM
     wave_speed: float = 200.0
-    sample_rate: float = 100.0
+    sample_rate: float = SAMPLE_RATE_HZ
     min_event_drop: float = 0.5
     sync_time: float = 2.0
     flavour: Literal["canonical", "vendor"] = "canonical"
@@ -136,13 +134,45 @@ class BenchTest:
         Returns
         -------
         LoadPath
-            Normal load held, then the actuator's travel.
+            Normal load held, then the actuator's travel
+            (:func:`slipwave.setup.driven_load_path`).
 
         """
-        travel = self.speed * (self.duration - self.loading_time) + 2 * self.travel_step
-        return LoadPath(normal_load=self.normal_load, normal_control="force",
-                        machine_stiffness=self.machine_stiffness, max_travel=travel,
-                        travel_step=self.travel_step)
+        return driven_load_path(normal_load=self.normal_load, speed=self.speed,
+                                duration=self.duration, loading_time=self.loading_time,
+                                machine_stiffness=self.machine_stiffness,
+                                travel_step=self.travel_step)
+
+
+def setup_bench_test(setup: TestSetup, friction: Coulomb, *, elements: int) -> BenchTest:
+    """The virtual-bench spec that runs a real test's setup with a friction law (no video).
+
+    Parameters
+    ----------
+    setup
+        The test's configuration (:func:`slipwave.setup.read_test_setup`).
+    friction
+        The law (:class:`~slipwave.solver.Coulomb`, with run-in, or
+        :class:`~slipwave.solver.SlipWeakening`).
+    elements
+        Elements along the contact.
+
+    Returns
+    -------
+    BenchTest
+        The test's geometry, material, loads, drive and duration with the law.
+
+    """
+    return BenchTest(
+        setup.test_id, height=setup["height_mm"], length=setup["length_mm"],
+        width=setup["width_mm"], youngs_modulus=setup["youngs_modulus_mpa"],
+        poisson_ratio=setup["poisson_ratio"], elements=elements, fs=friction.fs,
+        fd=friction.dynamic, fs_final=friction.fs_final,
+        runin_slips=friction.runin_slips if friction.fs_final is not None else 4,
+        dc=getattr(friction, "dc", None), normal_load=setup["normal_load_n"],
+        speed=setup["speed_mm_s"], duration=setup["duration_s"],
+        loading_time=setup["loading_time_s"],
+        machine_stiffness=setup["machine_stiffness_n_mm"], video="none")
 
 
 @dataclass
@@ -162,8 +192,8 @@ class BenchResult:
         yield from _render(self)
 
 
-def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | None = None
-                  ) -> BenchResult:
+def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | None = None,
+                  cache: SolverCache | None = None) -> BenchResult:
     """Generate one test in memory: recording, truth and a frame iterator.
 
     Parameters
@@ -175,6 +205,9 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     memory_limit_gb
         Refuse a test whose simulation would need more (GB); ``None``:
         :func:`slipwave.resources.require_memory`'s default.
+    cache
+        The solver's cache (a campaign's tests share their slabs'); ``None``: computed
+        afresh.
 
     Returns
     -------
@@ -191,8 +224,7 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     require_memory(condensation_memory(slab, recovery=spec.video != "none"),
                    f"the virtual test {spec.test_id!r} ({spec.elements} elements, H = "
                    f"{spec.height:g} mm)", limit_gb=memory_limit_gb)
-    simulation = simulate(slab, spec.friction(), spec.load_path(),
-                          condensed=condense(slab, store=DiskCache()))
+    simulation = simulate(slab, spec.friction(), spec.load_path(), cache=cache)
     clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
                           duration=spec.duration, sample_rate=spec.sample_rate,
                           wave_speed=spec.wave_speed)
@@ -511,7 +543,7 @@ def load_tests(config: dict[str, Any], *, source: str = "the bench config",
 
 def write_campaign(
     specs: list[BenchTest], folder: str | PathLike[str], *, seed: int = 0, progress: bool = True,
-    memory_limit_gb: float | None = None,
+    memory_limit_gb: float | None = None, cache: SolverCache | None = None,
 ) -> Path:
     """Write every test of a campaign and its table ``tests.tsv``; returns the table.
 
@@ -529,6 +561,8 @@ def write_campaign(
         Show progress bars.
     memory_limit_gb
         As in :func:`simulate_test`.
+    cache
+        The solver's cache, shared by the tests; ``None``: the campaign's own.
 
     Returns
     -------
@@ -537,9 +571,11 @@ def write_campaign(
 
     """
     folder = Path(folder)
+    cache = cache or SolverCache()
     rows = []
     for k, spec in enumerate(tqdm(specs, desc="virtual bench", unit="test", disable=not progress)):
-        result = simulate_test(spec, seed=seed + k, memory_limit_gb=memory_limit_gb)
+        result = simulate_test(spec, seed=seed + k, memory_limit_gb=memory_limit_gb,
+                               cache=cache)
         paths = write_test(result, folder, progress=progress)
         video = paths.get("video")
         rows.append({"test_id": spec.test_id, "csv": paths["csv"].name,

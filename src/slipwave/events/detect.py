@@ -10,6 +10,8 @@ contact held.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -258,6 +260,95 @@ def _convention(recording: xr.Dataset, time: np.ndarray, load: np.ndarray, drops
                         " x_axis assumed: set edge_convention (x_axis or outward) for this test")
         return "x_axis", f"assumed: {evidence}"
     return found, f"measured: {evidence}"
+
+
+@dataclass(frozen=True)
+class DetectionSettings:
+    """The settings of event detection, as every stage that detects uses them.
+
+    How slips are found: the detect stage reads the measured events with them; the
+    fit, the simulate stage and the comparison read the measured and the simulated
+    recordings with the same ones, so that a campaign's ``detection`` section reaches
+    every stage, and ``fit.json`` records them. Each is :func:`detect_events`'s
+    argument of that name. How a slip is classified (``gross_edge_ratio``) is not
+    among them: a simulated test reads its own off its simulated slips.
+
+    Attributes
+    ----------
+    threshold, max_spike, max_duration, min_fall_rate
+        As in :func:`~slipwave.events.load_drops`.
+    edge_convention
+        How the measured edge sensors read (:func:`detect_events`).
+
+    Examples
+    --------
+    >>> settings = DetectionSettings(threshold=10.0)
+    >>> DetectionSettings.from_dict(settings.to_dict()) == settings
+    True
+    """
+
+    threshold: float = THRESHOLD
+    max_spike: int = MAX_SPIKE
+    max_duration: float | None = MAX_DURATION_S
+    min_fall_rate: float = MIN_FALL_RATE
+    edge_convention: str = EDGE_CONVENTION
+
+    def keywords(self, **overrides: Any) -> dict[str, Any]:
+        """:func:`detect_events`'s keyword arguments, some replaced.
+
+        Parameters
+        ----------
+        **overrides
+            Settings to replace (e.g. ``edge_convention="x_axis"`` for a simulated
+            recording, whose edges read along +x).
+
+        Returns
+        -------
+        dict
+            Setting -> value.
+
+        """
+        return {**asdict(self), **overrides}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The settings in plain types (``fit.json``'s ``detection``).
+
+        Returns
+        -------
+        dict
+            One entry per attribute.
+
+        """
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, content: Mapping[str, Any]) -> DetectionSettings:
+        """The settings of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        content
+            Attribute -> value; a missing one takes its default.
+
+        Returns
+        -------
+        DetectionSettings
+            The settings.
+
+        Raises
+        ------
+        SlipwaveError
+            Naming a key that is not a setting.
+
+        """
+        unknown = sorted(set(content) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise SlipwaveError(f"not detection settings: {', '.join(unknown)}")
+        return cls(**content)
+
+
+DEFAULT_DETECTION = DetectionSettings()
+"""Detection with every setting at its default."""
 
 
 def detect_events(

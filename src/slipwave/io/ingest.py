@@ -310,8 +310,10 @@ def _unit_factor(path: Path, head: _Head, channel: str, k: int) -> float:
         ) from err
 
 
-_HEAD_BYTES = 1 << 20  # the metadata, header and first rows are looked for in the first MiB
-_CHUNK_BYTES = 4 << 20  # the data are parsed in blocks of whole lines of about this size
+HEAD_BYTES = 1 << 20
+"""Bytes at the start of a file in which its metadata, header and first rows are looked for."""
+CHUNK_BYTES = 4 << 20
+"""Bytes of whole lines parsed at a time: a file is never read whole into memory."""
 
 
 def _open(path: Path) -> BinaryIO:
@@ -340,7 +342,7 @@ def _text_stream(path: Path, handle: BinaryIO, prefix: bytes) -> tuple[BinaryIO,
             raise AcquisitionError(path, f"starts as UTF-16 but is not: {err.reason} at byte "
                                    f"{err.start}") from err
         stream = io.BytesIO(text.encode("utf-8"))
-        return stream, stream.read(_HEAD_BYTES)
+        return stream, stream.read(HEAD_BYTES)
     nul = prefix.find(b"\x00")
     if nul >= 0:
         raise AcquisitionError(path, f"not a text CSV: binary content (a NUL byte at byte {nul})")
@@ -369,7 +371,7 @@ def _blocks(stream: BinaryIO, start: int, digest: Any = None) -> Iterator[tuple[
         digest.update(stream.read(start))
     carry = b""
     while True:
-        block = stream.read(_CHUNK_BYTES)
+        block = stream.read(CHUNK_BYTES)
         if digest is not None:
             digest.update(block)
         if not block:
@@ -643,7 +645,7 @@ def read_acquisition(
     path = Path(path)
     with _open(path) as handle:
         digest = hashlib.sha256()
-        stream, prefix = _text_stream(path, handle, handle.read(_HEAD_BYTES))
+        stream, prefix = _text_stream(path, handle, handle.read(HEAD_BYTES))
         if not prefix.strip():
             raise AcquisitionError(path, "the file is empty")
         size = stream.seek(0, os.SEEK_END)

@@ -11,6 +11,7 @@ by increment along the bench's load path.
 """
 
 from slipwave.solver.behaviour import Behaviour, describe_behaviour
+from slipwave.solver.cache import SolverCache
 from slipwave.solver.contact import Body, Control
 from slipwave.solver.simulate import Coulomb, LoadPath, SlipWeakening, simulate
 from slipwave.solver.slab import Condensed, Slab, condense
@@ -24,6 +25,7 @@ __all__ = [
     "LoadPath",
     "Slab",
     "SlipWeakening",
+    "SolverCache",
     "condense",
     "describe_behaviour",
     "simulate",

@@ -65,6 +65,29 @@ class NotConverged(Exception):  # noqa: N818 - an internal signal, not an error 
 
 
 @dataclass(frozen=True)
+class KeptSolves:
+    """What a :class:`Body` keeps of the zone states it has solved.
+
+    Attributes
+    ----------
+    layouts
+        Zone states whose index sets and matrix blocks are kept.
+    compliance_layouts
+        Those solved in the compliance form (fewer nodes stick than are open, and the
+        body alone is held); the others in the stiffness form.
+    factorisations
+        Factorised linear problems (a zone state with its slipping coefficients).
+    affine_maps
+        Those met often enough to be solved by a kept affine map of the loads.
+    """
+
+    layouts: int
+    compliance_layouts: int
+    factorisations: int
+    affine_maps: int
+
+
+@dataclass(frozen=True)
 class Control:
     """Prescribed flat motion or total force for one increment.
 
@@ -155,6 +178,21 @@ class Body:
         self._plans: dict[bytes, _Plan] = {}
         self._layouts: dict[bytes, _Layout] = {}
         self._plans_bytes = 0
+
+    def kept_solves(self) -> KeptSolves:
+        """What the body keeps of the zone states it has solved (as ``cache_info``).
+
+        Returns
+        -------
+        KeptSolves
+            Counts of the kept layouts and factorisations, by form and kind.
+
+        """
+        return KeptSolves(
+            layouts=len(self._layouts),
+            compliance_layouts=sum(layout.compliance for layout in self._layouts.values()),
+            factorisations=len(self._plans),
+            affine_maps=sum(plan.operator is not None for plan in self._plans.values()))
 
     def solve_linear(
         self,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
@@ -12,8 +11,9 @@ import xarray as xr
 from slipwave import __version__
 from slipwave.defaults import CONVENTIONS, NORMAL_LOAD_N, TANGENTIAL_STEP_N
 from slipwave.errors import SlipwaveError, SolverError
+from slipwave.solver.cache import SolverCache
 from slipwave.solver.contact import OPEN, STICK, Body, Control, Increment, NotConverged
-from slipwave.solver.slab import Condensed, Slab, condense
+from slipwave.solver.slab import Condensed, Slab, condense, geometry_key
 
 RESIDUAL_TOLERANCE = 1e-8
 """Largest relative complementarity residual of a returned step."""
@@ -377,7 +377,7 @@ def simulate(
     friction: Coulomb,
     path: LoadPath | None = None,
     *,
-    condensed: Condensed | None = None,
+    cache: SolverCache | None = None,
 ) -> xr.Dataset:
     """Follow the bench's load path on a slab, increment by increment.
 
@@ -415,9 +415,9 @@ def simulate(
         The interface's friction law.
     path
         The load path (``None``: :class:`LoadPath`'s defaults).
-    condensed
-        The slab's condensed matrices, when the caller has them (a map row, a
-        store); ``None``: :func:`~slipwave.solver.condense`.
+    cache
+        Where the slab's condensation and its frictionless normal approach are
+        looked up and kept (a map row's, a fit's); ``None``: computed afresh.
 
     Examples
     --------
@@ -427,12 +427,12 @@ def simulate(
 
     """
     path = path or LoadPath()
-    condensed = condensed or condense(slab)
+    condensed = condense(slab, cache=cache)
     body = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
     run = _Run(slab, friction, body, condensed, s_prev=np.zeros(body.n), slip=np.zeros(body.n))
     width = slab.width
 
-    _normal_loading(run, path)
+    _normal_loading(run, path, cache)
     held = run.steps[-1]["approach"]
     run.guess = run.guess_sign = None
 
@@ -483,38 +483,32 @@ def simulate(
     return _to_dataset(run, path)
 
 
-_FRICTIONLESS_APPROACHES: OrderedDict[tuple[object, ...], tuple[Condensed, list[dict[str, Any]],
-                                                            np.ndarray, np.ndarray]] = OrderedDict()
-_APPROACHES_KEPT = 4
-
-
-def _normal_loading(run: _Run, path: LoadPath) -> None:
+def _normal_loading(run: _Run, path: LoadPath, cache: SolverCache | None) -> None:
     """Step 1: the flat pressed onto the slab in ``normal_steps`` load steps.
 
-    A frictionless approach does not depend on the friction law: its steps are
-    kept (for the last few slabs) and reused, so a map row computes it once.
+    A frictionless approach does not depend on the friction law: a ``cache`` keeps its
+    steps, so that a map row or a fit computes it once per slab.
     """
-    width = run.slab.width
-    key = (id(run.condensed), run.body.g0.tobytes(), width, path.normal_load, path.normal_steps)
-    if not path.normal_friction and key in _FRICTIONLESS_APPROACHES:
-        condensed, steps, s_prev, slip = _FRICTIONLESS_APPROACHES[key]
-        if condensed is run.condensed:  # the id names this very object
-            static = run.friction.static_after(0)
-            run.steps = [{**step, "static_friction": static} for step in steps]
-            run.s_prev, run.slip = s_prev.copy(), slip.copy()
-            return
+    slab = run.slab
+    key = ("frictionless approach", geometry_key(slab), slab.youngs_modulus, slab.width,
+           run.body.g0.tobytes(), path.normal_load, path.normal_steps)
+    kept = None if path.normal_friction or cache is None else cache.approach(key)
+    if kept is not None:
+        steps, s_prev, slip = kept
+        static = run.friction.static_after(0)
+        run.steps = [{**step, "static_friction": static} for step in steps]
+        run.s_prev, run.slip = s_prev.copy(), slip.copy()
+        return
     previous = Control(dx=0.0, N=0.0)
     run.frictionless = not path.normal_friction
     for k in range(1, path.normal_steps + 1):
-        control = Control(dx=0.0, N=path.normal_load / width * k / path.normal_steps)
+        control = Control(dx=0.0, N=path.normal_load / slab.width * k / path.normal_steps)
         run.advance(previous, control, "normal")
         previous = control
     run.frictionless = False
-    if not path.normal_friction:
-        _FRICTIONLESS_APPROACHES[key] = (run.condensed, [dict(step) for step in run.steps],
-                                         run.s_prev.copy(), run.slip.copy())
-        while len(_FRICTIONLESS_APPROACHES) > _APPROACHES_KEPT:
-            _FRICTIONLESS_APPROACHES.popitem(last=False)
+    if not path.normal_friction and cache is not None:
+        cache.keep_approach(key, ([dict(step) for step in run.steps], run.s_prev.copy(),
+                                  run.slip.copy()))
 
 
 def _drive_through_machine(run: _Run, path: LoadPath, hold: Any) -> None:

@@ -12,9 +12,10 @@ Schur complement of the interior), so that each load increment is a small
 dense problem; the lateral displacements of the slab's faces at the sensor
 height follow from the contact displacements through a 2 x 2n matrix.
 Condensed matrices are computed for E = 1 and scaled, so a sweep over E or
-friction does not rebuild them; they are kept in memory, and a caller may hand
-in a store that keeps them on disk (:class:`slipwave.cache.DiskCache`): the
-solver itself reads and writes no file.
+friction does not rebuild them; a caller keeps them in a
+:class:`~slipwave.solver.cache.SolverCache`, which may hand them to a store that
+keeps them on disk (:class:`slipwave.cache.DiskCache`): the solver itself reads and
+writes no file.
 """
 
 from __future__ import annotations
@@ -22,10 +23,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
-from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -34,14 +34,17 @@ from skfem import Basis, BilinearForm, ElementQuad1, ElementVector, MeshQuad, as
 from skfem.helpers import ddot, div, sym_grad
 
 from slipwave.defaults import (
-    CONTACT_ELEMENTS,
     CONTACT_LENGTH_MM,
+    MAP_ELEMENTS,
     POISSON_RATIO,
     SLAB_HEIGHT_MM,
     SLAB_WIDTH_MM,
     YOUNGS_MODULUS_MPA,
 )
 from slipwave.errors import SlipwaveError
+
+if TYPE_CHECKING:
+    from slipwave.solver.cache import SolverCache
 
 SENSOR_HEIGHT = 5.0
 """Height (mm) above the contact of the DG and DD displacement sensors."""
@@ -83,7 +86,7 @@ class Slab:
     width: float = SLAB_WIDTH_MM
     youngs_modulus: float = YOUNGS_MODULUS_MPA
     poisson_ratio: float = POISSON_RATIO
-    elements: int = CONTACT_ELEMENTS
+    elements: int = MAP_ELEMENTS
     holder: Literal["clamped", "free"] = "clamped"
     profile: Callable[[np.ndarray], np.ndarray] | None = field(default=None, compare=False)
     growth: float = 1.15
@@ -243,23 +246,18 @@ def geometry_key(slab: Slab) -> str:
     return hashlib.sha256(repr(fields).encode()).hexdigest()[:24]
 
 
-_MEMORY: OrderedDict[str, Condensed] = OrderedDict()
-_MEMORY_SIZE = 32  # geometries kept in memory (a map's 12 H/L values fit)
-
-
-def condense(slab: Slab, *, store: CondensationStore | None = None) -> Condensed:
+def condense(slab: Slab, *, cache: SolverCache | None = None) -> Condensed:
     """Condensed stiffness and sensor matrix of a slab.
 
     The matrices are computed for E = 1 and scaled, so a sweep over E or
-    friction does not rebuild them; the last 32 geometries are kept in
-    memory, and ``store`` keeps them across processes.
+    friction does not rebuild them when a ``cache`` keeps them.
 
     Parameters
     ----------
     slab
         The slab.
-    store
-        Looked up on a memory miss and given what is assembled.
+    cache
+        Where the unit matrices are looked up and kept; ``None``: computed afresh.
 
     Returns
     -------
@@ -268,26 +266,13 @@ def condense(slab: Slab, *, store: CondensationStore | None = None) -> Condensed
 
     """
     geometry = dataclasses.replace(slab, youngs_modulus=1.0, width=1.0, profile=None)
-    key = geometry_key(geometry)
-    unit = _MEMORY.get(key)
-    if unit is None and store is not None:
-        unit = store.load(key)
-    if unit is None:
+    if cache is None:
         unit = assemble_condensed(geometry)
-        if store is not None:
-            store.save(key, unit)
-    _MEMORY[key] = unit
-    _MEMORY.move_to_end(key)
-    while len(_MEMORY) > _MEMORY_SIZE:
-        _MEMORY.popitem(last=False)
+    else:
+        unit = cache.condensed(geometry_key(geometry), lambda: assemble_condensed(geometry))
     E = slab.youngs_modulus
     compliance = None if unit.compliance is None else unit.compliance / E
     return Condensed(unit.stiffness * E, unit.sensors, compliance)
-
-
-def forget_condensed() -> None:
-    """Empty the in-memory cache of :func:`condense` (for tests and benchmarks)."""
-    _MEMORY.clear()
 
 
 @dataclass(frozen=True)

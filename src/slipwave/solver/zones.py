@@ -18,7 +18,7 @@ they were.
 
 from __future__ import annotations
 
-from typing import cast
+from typing import TYPE_CHECKING, TypeAlias, cast
 
 import numpy as np
 import pandas as pd
@@ -109,9 +109,10 @@ def zone_runs(codes: np.ndarray, spacing: float, min_size: float) -> list[tuple[
     return [(code, a, b) for code, a, b in runs]
 
 
-Zone = tuple[int, int, int, int, int, tuple[int, ...]]
-"""A zone at a step: (step, identity, condition code, first node, last node, identities
-of the previous step's zones it absorbed)."""
+if TYPE_CHECKING:
+    # a zone at a step: (step, identity, condition code, first node, last node,
+    # identities of the previous step's zones it absorbed)
+    Zone: TypeAlias = tuple[int, int, int, int, int, tuple[int, ...]]
 
 
 def follow_zones(codes: np.ndarray, spacing: float, min_size: float) -> list[Zone]:
@@ -133,7 +134,9 @@ def follow_zones(codes: np.ndarray, spacing: float, min_size: float) -> list[Zon
     Returns
     -------
     list of tuple
-        :data:`Zone` tuples, step by step, left to right.
+        One tuple per zone, step by step, left to right: (step, identity, condition
+        code, first node, last node, identities of the previous step's zones it
+        absorbed).
 
     Examples
     --------

@@ -15,11 +15,14 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import av
 import numpy as np
 
 from slipwave.errors import SlipwaveError
+
+if TYPE_CHECKING:
+    import av
 
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff")
 
@@ -68,6 +71,8 @@ class FrameSource:
                                 f"the frames before it are {shape[1]} x {shape[0]} px")
 
     def _video(self) -> Iterator[Frame]:
+        import av  # PyAV loads FFmpeg: only where a video is read
+
         last_good = "none (the first frame is damaged)"
         lost: list[str] = []
         shape = None
@@ -114,6 +119,8 @@ class FrameSource:
     @staticmethod
     def _decode(container: av.container.InputContainer,
                 stream: av.video.stream.VideoStream) -> Iterator[av.VideoFrame]:
+        import av
+
         for packet in container.demux(stream):
             if packet.size == 0 and packet.pts is None:  # the flush packet at the end
                 yield from packet.decode()

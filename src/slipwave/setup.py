@@ -1,4 +1,4 @@
-"""A test's own configuration, read from its files: what its simulation needs.
+"""A real test's configuration, read from its files: what its simulation needs.
 
 The slab's geometry and material come from the recording's header (the card's
 metadata lines, ``length_mm``, ``height_mm``...) or from the campaign table's columns
@@ -18,10 +18,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from slipwave.bench.generate import BenchTest
-from slipwave.defaults import CONTACT_ELEMENTS
+from slipwave.defaults import TRAVEL_STEP_MM
 from slipwave.errors import SlipwaveError
-from slipwave.solver import Coulomb
+from slipwave.solver import LoadPath, Slab
 
 GEOMETRY = {
     "length_mm": "contact length L, mm",
@@ -82,33 +81,45 @@ class TestSetup:
     def __getitem__(self, key: str) -> float:
         return self.settings[key].value
 
-    def bench_test(self, friction: Coulomb, *, elements: int = CONTACT_ELEMENTS) -> BenchTest:
-        """The virtual-bench spec that runs this test with a friction law (no video).
+    def slab(self, elements: int) -> Slab:
+        """The test's slab, meshed with ``elements`` along the contact.
 
         Parameters
         ----------
-        friction
-            The law (:class:`~slipwave.solver.Coulomb`, with run-in, or
-            :class:`~slipwave.solver.SlipWeakening`).
         elements
             Elements along the contact.
 
         Returns
         -------
-        BenchTest
-            The test's geometry, material, loads, drive and duration with the law.
+        Slab
+            Its geometry and material.
+
+        Raises
+        ------
+        SlipwaveError
+            Naming the test, when the geometry or material is not a slab's.
 
         """
-        return BenchTest(
-            self.test_id, height=self["height_mm"], length=self["length_mm"],
-            width=self["width_mm"], youngs_modulus=self["youngs_modulus_mpa"],
-            poisson_ratio=self["poisson_ratio"], elements=elements, fs=friction.fs,
-            fd=friction.dynamic, fs_final=friction.fs_final,
-            runin_slips=friction.runin_slips if friction.fs_final is not None else 4,
-            dc=getattr(friction, "dc", None), normal_load=self["normal_load_n"],
-            speed=self["speed_mm_s"], duration=self["duration_s"],
-            loading_time=self["loading_time_s"],
-            machine_stiffness=self["machine_stiffness_n_mm"], video="none")
+        try:
+            return Slab(length=self["length_mm"], height=self["height_mm"],
+                        width=self["width_mm"], youngs_modulus=self["youngs_modulus_mpa"],
+                        poisson_ratio=self["poisson_ratio"], elements=elements)
+        except SlipwaveError as err:
+            raise SlipwaveError(f"test {self.test_id!r}: {err}") from err
+
+    def load_path(self) -> LoadPath:
+        """The test's load path: N held, the flat driven through the machine's spring.
+
+        Returns
+        -------
+        LoadPath
+            See :func:`driven_load_path`.
+
+        """
+        return driven_load_path(normal_load=self["normal_load_n"], speed=self["speed_mm_s"],
+                                duration=self["duration_s"],
+                                loading_time=self["loading_time_s"],
+                                machine_stiffness=self["machine_stiffness_n_mm"])
 
     @classmethod
     def from_dict(cls, content: Mapping[str, Any]) -> TestSetup:
@@ -145,6 +156,48 @@ class TestSetup:
         return {"test_id": self.test_id, "edge_reference": self.edge_reference,
                 **{key: {"value": round(s.value, 6), "source": s.source}
                    for key, s in self.settings.items()}}
+
+
+def driven_load_path(*, normal_load: float, speed: float, duration: float,
+                     loading_time: float, machine_stiffness: float,
+                     travel_step: float = TRAVEL_STEP_MM) -> LoadPath:
+    """A bench's load path: the normal load held, the actuator driven at ``speed``.
+
+    The actuator's travel covers the tangential loading (``duration`` less
+    ``loading_time``) and two steps more, so that the sampled signals reach the
+    recording's end.
+
+    Parameters
+    ----------
+    normal_load
+        Held after the normal loading, N.
+    speed
+        The actuator's speed, mm/s.
+    duration
+        The recording's length, s.
+    loading_time
+        How long the normal loading takes, s.
+    machine_stiffness
+        The spring between the actuator and the flat, N/mm.
+    travel_step
+        The actuator's travel per load step, mm.
+
+    Returns
+    -------
+    LoadPath
+        Normal load held (``force``), then the actuator's travel.
+
+    Examples
+    --------
+    >>> path = driven_load_path(normal_load=85.0, speed=0.05, duration=40.0,
+    ...                         loading_time=10.0, machine_stiffness=40.0)
+    >>> round(path.max_travel, 6), path.travel_step
+    (1.56, 0.03)
+    """
+    travel = speed * (duration - loading_time) + 2 * travel_step
+    return LoadPath(normal_load=normal_load, normal_control="force",
+                    machine_stiffness=machine_stiffness, max_travel=travel,
+                    travel_step=travel_step)
 
 
 def _tangential_window(recording: xr.Dataset) -> np.ndarray:

@@ -1,12 +1,12 @@
 """The simulate stage: a test run again through the solver with its fitted law.
 
 :func:`replay_test` follows the test's own load path (its setup, from
-:func:`slipwave.bench.setup.read_test_setup`) with a friction law and returns what the
+:func:`slipwave.setup.read_test_setup`) with a friction law and returns what the
 measurement has, in the measurement's shapes: a recording like
 :func:`slipwave.io.read_acquisition`'s (T, N, DG, DD, DT against time, noise-free,
 the edges in the test's edge reference), and the contact's history: the zone state of
-every node at every step and the simulated photoelastic kymograph (the virtual bench's
-camera model, the band the video's kymograph reads), so that detection, the
+every node at every step and the simulated photoelastic kymograph
+(:mod:`slipwave.photoelastic`, the band the video's kymograph reads), so that detection, the
 kymograph's readers and the comparison run on both unchanged. :func:`sequence_scatter`
 runs the law's neighbours (fs or fd a load cell's calibration off) for the
 simulation's own scatter, which the comparison's tolerances hold.
@@ -20,16 +20,16 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from slipwave.bench.camera import Camera, Photoelastic
-from slipwave.bench.sensors import step_times
-from slipwave.bench.setup import TestSetup
-from slipwave.cache import DiskCache
 from slipwave.compare import ORIGIN, SCATTER_STEP, event_features, first_wave
-from slipwave.defaults import BAND_MM, CONVENTIONS
+from slipwave.defaults import BAND_MM, CONVENTIONS, SAMPLE_RATE_HZ
 from slipwave.errors import SlipwaveError
-from slipwave.events import detect_events
+from slipwave.events import DetectionSettings, detect_events
+from slipwave.events.detect import DEFAULT_DETECTION
 from slipwave.fit import detected_edge_threshold, simulated_recording
-from slipwave.solver import Coulomb, Slab, condense, simulate
+from slipwave.photoelastic import Camera, Photoelastic
+from slipwave.setup import TestSetup
+from slipwave.solver import Coulomb, Slab, SolverCache, simulate
+from slipwave.solver.signals import step_times
 
 STATE_NAMES = "open stick slip"
 """Zone state codes 0, 1, 2 (the solver's)."""
@@ -56,8 +56,11 @@ class Replay:
     contact: xr.Dataset
 
 
-def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, elements: int = 80,
-                sample_rate: float = 100.0, kymograph: bool = True) -> Replay:
+def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, elements: int,
+                sample_rate: float = SAMPLE_RATE_HZ, kymograph: bool = True,
+                band_mm: tuple[float, float] = BAND_MM,
+                detection: DetectionSettings = DEFAULT_DETECTION,
+                cache: SolverCache | None = None) -> Replay:
     """Simulate a test with a friction law and shape it like the measurement.
 
     Parameters
@@ -75,6 +78,12 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
         The recording's sampling rate, Hz.
     kymograph
         Also render the simulated kymograph.
+    band_mm
+        The kymograph's band above the interface, mm (the video's).
+    detection
+        The detection's settings (the measurement's), for the simulated slips.
+    cache
+        The solver's cache; ``None``: computed afresh.
 
     Returns
     -------
@@ -84,22 +93,21 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
         simulated slips (:func:`slipwave.fit.detected_edge_threshold`).
 
     """
-    spec = setup.bench_test(friction, elements=elements)
-    slab = spec.slab()
-    simulation = simulate(slab, friction, spec.load_path(),
-                          condensed=condense(slab, store=DiskCache()))
+    slab = setup.slab(elements)
+    simulation = simulate(slab, friction, setup.load_path(), cache=cache)
     recording = simulated_recording(simulation, setup, sample_rate=sample_rate)
     recording.attrs.update({
         "test_id": setup.test_id, "source": f"simulation of {setup.test_id}",
         "sample_rate_hz": sample_rate, "edge_reference": setup.edge_reference,
         "gross_edge_ratio": detected_edge_threshold(simulation, setup, min_drop=min_drop,
-                                                    sample_rate=sample_rate),
+                                                    sample_rate=sample_rate,
+                                                    detection=detection),
         "friction_law": simulation.attrs.get("friction_law", type(friction).__name__),
         "Conventions": CONVENTIONS,
         **{key: setting.value for key, setting in setup.settings.items()}})
     times = step_times(simulation, speed=setup["speed_mm_s"],
                        loading_time=setup["loading_time_s"])
-    contact = contact_history(simulation, times, spec.slab() if kymograph else None)
+    contact = contact_history(simulation, times, slab if kymograph else None, band_mm=band_mm)
     return Replay(simulation, recording, contact)
 
 
@@ -137,8 +145,10 @@ def neighbouring_laws(friction: Coulomb, step: float = SCATTER_STEP) -> list[Cou
 
 
 def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
-                     gross_edge_ratio: float, elements: int = 80, sample_rate: float = 100.0,
-                     step: float = SCATTER_STEP) -> pd.DataFrame:
+                     gross_edge_ratio: float, elements: int,
+                     sample_rate: float = SAMPLE_RATE_HZ, step: float = SCATTER_STEP,
+                     detection: DetectionSettings = DEFAULT_DETECTION,
+                     cache: SolverCache | None = None) -> pd.DataFrame:
     """The compared features of the law's neighbouring simulations.
 
     Under fs > fd a law settles in a cycle of slips that changes by whole slips with
@@ -151,7 +161,7 @@ def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
 
     Parameters
     ----------
-    setup, friction, min_drop, elements, sample_rate
+    setup, friction, min_drop, elements, sample_rate, detection, cache
         As in :func:`replay_test`.
     gross_edge_ratio
         The gross/partial edge threshold of the simulation compared (its recording's
@@ -168,20 +178,17 @@ def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
     """
     rows = []
     for law in neighbouring_laws(friction, step):
-        spec = setup.bench_test(law, elements=elements)
-        slab = spec.slab()
-        simulation = simulate(slab, law, spec.load_path(),
-                              condensed=condense(slab, store=DiskCache()))
+        simulation = simulate(setup.slab(elements), law, setup.load_path(), cache=cache)
         events = detect_events(simulated_recording(simulation, setup, sample_rate=sample_rate),
-                               min_drop=min_drop, edge_convention="x_axis",
-                               gross_edge_ratio=gross_edge_ratio)
+                               **detection.keywords(min_drop=min_drop, edge_convention="x_axis",
+                                                    gross_edge_ratio=gross_edge_ratio))
         rows.append({"fs": law.fs, "fd": law.dynamic, **event_features(events),
                      ORIGIN.name: first_wave(simulation)[0]})
     return pd.DataFrame(rows)
 
 
-def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None = None
-                    ) -> xr.Dataset:
+def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None = None, *,
+                    band_mm: tuple[float, float] = BAND_MM) -> xr.Dataset:
     """Zone states and, with ``slab``, the simulated kymograph, against time.
 
     Parameters
@@ -189,9 +196,11 @@ def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None
     simulation
         The solver's steps.
     times
-        Each step's end, s (:func:`slipwave.bench.sensors.step_times`).
+        Each step's end, s (:func:`slipwave.solver.signals.step_times`).
     slab
         The slab simulated; ``None``: no kymograph.
+    band_mm
+        The kymograph's band above the interface, mm (low, high).
 
     Returns
     -------
@@ -218,7 +227,7 @@ def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None
     image = Photoelastic(slab, camera)
     rows = np.nonzero(image.inside)[0]
     height = (image.interface_row - (rows + 0.5)) / image.scale
-    band = (height >= BAND_MM[0]) & (height <= BAND_MM[1])
+    band = (height >= band_mm[0]) & (height <= band_mm[1])
     x = image.pixel_x[band]
     edges = np.linspace(-slab.length / 2, slab.length / 2, 2 * slab.elements + 1)
     column = np.clip(np.digitize(x, edges) - 1, 0, edges.size - 2)
@@ -233,7 +242,7 @@ def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None
                                    {"units": "mm", "long_name": "position in the image"}))
     ds["intensity"] = (("time", "x_image"), rows_out,
                        {"units": "1", "long_name": "simulated dark-field intensity in the "
-                        f"band {BAND_MM[0]}-{BAND_MM[1]} mm above the interface (grey levels)"})
+                        f"band {band_mm[0]}-{band_mm[1]} mm above the interface (grey levels)"})
     return ds.merge(first_gross_frames(simulation, times, image))
 
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slipwave.bench.setup import drive, normal_load_plateau, read_test_setup
 from slipwave.errors import SlipwaveError
 from slipwave.io import read_acquisition
+from slipwave.setup import drive, normal_load_plateau, read_test_setup
 
 RAW = Path(__file__).parents[1] / "raw_data" / "bench"
 MATERIAL = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
@@ -78,13 +78,14 @@ def test_the_setup_runs_the_test_again_through_the_solver(hl075):
     """The bench's own law on the setup read from hl075's files: its gross slips again."""
     import pandas as pd
 
-    from slipwave.bench.generate import simulate_test
+    from slipwave.bench.generate import setup_bench_test, simulate_test
     from slipwave.solver import Coulomb
 
     setup = read_test_setup(hl075, {"test_id": "hl075", **MATERIAL})
     assert setup["loading_time_s"] == pytest.approx(10.0, abs=0.2)
-    result = simulate_test(setup.bench_test(Coulomb(fs=0.9, fd=0.6, fs_final=1.2,
-                                                    runin_slips=4)), seed=0)
+    result = simulate_test(setup_bench_test(setup, Coulomb(fs=0.9, fd=0.6, fs_final=1.2,
+                                                           runin_slips=4), elements=160),
+                           seed=0)
     truth = pd.read_csv(RAW / "truth" / "hl075_events.csv")
     simulated = result.events[result.events["kind"] == "gross_slip"]
     measured = truth[truth["kind"] == "gross_slip"]

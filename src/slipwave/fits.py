@@ -1,0 +1,50 @@
+"""The fits stage: a campaign's fits in one table, one row per test.
+
+Each test's chosen law with its fs and fd and their 95 % intervals, and every law's
+parameters and AIC difference, from the tests' ``fit.json`` (:func:`slipwave.fit.fit_test`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import pandas as pd
+
+
+def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
+    """The campaign's fits, one row per test.
+
+    Parameters
+    ----------
+    fits
+        ``fit.json`` contents (:func:`fit_test`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``test_id``, ``height_ratio``, ``law`` (chosen), ``gross_slips``, each
+        parameter of each law as ``<law>_<name>``, ``_low``, ``_high``, each law's
+        ``<law>_delta_aic``, and the chosen law's ``fs``, ``fd`` with their intervals.
+
+    """
+    rows = []
+    for fit in fits:
+        setup = fit["setup"]
+        row: dict[str, Any] = {
+            "test_id": fit["test_id"],
+            "height_ratio": setup["height_mm"]["value"] / setup["length_mm"]["value"],
+            "law": fit["chosen"], "gross_slips": fit["measured"]["gross_slips"]}
+        chosen = fit["laws"][fit["chosen"]]["parameters"]
+        for name in ("fs", "fd"):
+            row[name] = chosen[name]["value"]
+            row[f"{name}_low"], row[f"{name}_high"] = chosen[name]["low"], chosen[name]["high"]
+        for law, entry in fit["laws"].items():
+            key = law.replace("-", "_")
+            row[f"{key}_delta_aic"] = entry["delta_aic"]
+            for name, value in entry["parameters"].items():
+                row[f"{key}_{name}"] = value["value"]
+                row[f"{key}_{name}_low"] = value["low"]
+                row[f"{key}_{name}_high"] = value["high"]
+        rows.append(row)
+    return pd.DataFrame(rows)

@@ -1,0 +1,232 @@
+"""The photoelastic image of a slab: isochromatic fringes seen by a camera.
+
+A dark-field circular polariscope shows ``I = I0 sin^2(pi N_f)`` with the fringe
+order ``N_f = (s1 - s2) w / f_sigma``. :class:`Photoelastic` computes the
+in-plane stresses of the slab at the pixel centres from the contact
+displacements of a solver step (the slab's field follows linearly from them)
+and renders frames as the camera (:class:`Camera`) records them: background, the
+flat under the slab, optical blur, sensor noise, quantisation, and a sync LED in a
+corner. The simulate stage renders a fitted test's kymograph with it; the virtual
+bench its videos (:mod:`slipwave.bench.camera` writes them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from scipy import ndimage
+
+from slipwave.solver.slab import Slab, displacement_recovery
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Camera and polariscope settings.
+
+    Attributes
+    ----------
+    width, height
+        Image size (px).
+    fps
+        Nominal frame rate (frames per second of the camera's clock).
+    fringe_value
+        Material fringe value f_sigma (N/mm per fringe).
+    intensity
+        I0, the brightest fringe, in grey levels of an 8-bit image.
+    background
+        Grey level of the dark field (around the slab).
+    flat
+        Grey level of the flat seen below the interface.
+    blur
+        Gaussian optical blur, standard deviation in pixels.
+    noise
+        Sensor noise, standard deviation in 8-bit grey levels.
+    bits
+        8 or 16 bits per pixel.
+    clock_offset
+        Acquisition time (s) at which the camera's clock reads zero.
+    clock_rate_error
+        Relative rate error of the camera's clock (acquisition time elapses
+        ``1 + clock_rate_error`` times faster than the camera counts).
+    """
+
+    width: int = 320
+    height: int = 160
+    fps: float = 25.0
+    fringe_value: float = 0.2
+    intensity: float = 210.0
+    background: float = 14.0
+    flat: float = 60.0
+    blur: float = 0.8
+    noise: float = 1.5
+    bits: Literal[8, 16] = 8
+    clock_offset: float = 0.0
+    clock_rate_error: float = 0.0
+
+    def acquisition_time(self, camera_time: np.ndarray) -> np.ndarray:
+        """Acquisition-card time of frames stamped ``camera_time`` by the camera.
+
+        Parameters
+        ----------
+        camera_time
+            Frame timestamps, s.
+
+        Returns
+        -------
+        numpy.ndarray
+            The card's times, s.
+
+        """
+        return self.clock_offset + camera_time * (1.0 + self.clock_rate_error)
+
+
+class Photoelastic:
+    """Stress and fringe images of a slab on the camera's pixel grid.
+
+    Parameters
+    ----------
+    slab
+        The slab the solver ran.
+    camera
+        The camera.
+    """
+
+    def __init__(self, slab: Slab, camera: Camera) -> None:
+        self.slab = slab
+        self.camera = camera
+        recovery = displacement_recovery(slab)
+        self.grid_x, self.grid_y = recovery.x, recovery.y
+        n_rows, n_columns = recovery.ux.shape[:2]
+        self._ux = recovery.ux.reshape(n_rows * n_columns, -1)
+        self._uy = recovery.uy.reshape(n_rows * n_columns, -1)
+        self._shape = (n_rows, n_columns)
+        nu = slab.poisson_ratio
+        E = slab.youngs_modulus
+        self._lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+        self._mu = E / (2 * (1 + nu))
+
+        # The slab fills most of the image; the flat shows as a band below it.
+        band = max(4, camera.height // 8)
+        margin = 6
+        self.scale = min((camera.width - 2 * margin) / slab.length,
+                         (camera.height - band - margin) / slab.height)
+        self.interface_row = camera.height - band  # first row of the flat
+        self.left_column = 0.5 * (camera.width - self.scale * slab.length)
+        columns = np.arange(camera.width) + 0.5
+        rows = np.arange(camera.height) + 0.5
+        x = (columns - self.left_column) / self.scale - slab.length / 2
+        y = (self.interface_row - rows) / self.scale
+        X, Y = np.meshgrid(x, y)
+        self.inside = (np.abs(X) < slab.length / 2) & (Y > 0) & (slab.height > Y)
+        px, py = X[self.inside], Y[self.inside]
+        ex = np.clip(np.searchsorted(self.grid_x, px) - 1, 0, self.grid_x.size - 2)
+        ey = np.clip(np.searchsorted(self.grid_y, py) - 1, 0, self.grid_y.size - 2)
+        self._hx = self.grid_x[ex + 1] - self.grid_x[ex]
+        self._hy = self.grid_y[ey + 1] - self.grid_y[ey]
+        self._xi = (px - self.grid_x[ex]) / self._hx
+        self._eta = (py - self.grid_y[ey]) / self._hy
+        self._corners = [(ey + b) * n_columns + (ex + a) for b in (0, 1) for a in (0, 1)]
+        self.pixel_x = px
+
+    def stress(self, u: np.ndarray) -> np.ndarray:
+        """(3, pixels): sxx, syy, sxy (MPa) in the slab for contact displacements ``u``.
+
+        ``u`` is the solver's ``[ux, uy]`` of the contact nodes (mm). Stresses
+        are taken at the element centres, averaged to the nodes and
+        interpolated to the pixels: bilinear elements have strains that jump
+        between elements, which would draw the mesh into the fringes.
+
+        Parameters
+        ----------
+        u
+            Contact displacements ``[ux, uy]``, mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            (3, pixels) stresses, MPa.
+
+        """
+        UX = (self._ux @ u).reshape(self._shape)
+        UY = (self._uy @ u).reshape(self._shape)
+        hx = np.diff(self.grid_x)[None, :]
+        hy = np.diff(self.grid_y)[:, None]
+
+        def gradient(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            d_dx = (F[:-1, 1:] - F[:-1, :-1] + F[1:, 1:] - F[1:, :-1]) / (2 * hx)
+            d_dy = (F[1:, :-1] - F[:-1, :-1] + F[1:, 1:] - F[:-1, 1:]) / (2 * hy)
+            return d_dx, d_dy
+
+        dux_dx, dux_dy = gradient(UX)
+        duy_dx, duy_dy = gradient(UY)
+        trace = self._lam * (dux_dx + duy_dy)
+        centres = np.stack([trace + 2 * self._mu * dux_dx, trace + 2 * self._mu * duy_dy,
+                            self._mu * (dux_dy + duy_dx)])
+        # Average the (up to four) elements around each node.
+        total = np.zeros((3, *self._shape))
+        count = np.zeros(self._shape)
+        for dy in (0, 1):
+            for dx in (0, 1):
+                rows = slice(dy, dy + centres.shape[1])
+                columns = slice(dx, dx + centres.shape[2])
+                total[:, rows, columns] += centres
+                count[rows, columns] += 1
+        nodal = (total / count).reshape(3, -1)
+        c00, c10, c01, c11 = self._corners
+        xi, eta = self._xi, self._eta
+        return ((1 - xi) * (1 - eta) * nodal[:, c00] + xi * (1 - eta) * nodal[:, c10]
+                + (1 - xi) * eta * nodal[:, c01] + xi * eta * nodal[:, c11])
+
+    def fringe_order(self, stress: np.ndarray) -> np.ndarray:
+        """N_f = (s1 - s2) w / f_sigma at the slab's pixels.
+
+        Parameters
+        ----------
+        stress
+            From :meth:`stress`.
+
+        Returns
+        -------
+        numpy.ndarray
+            Fringe order at each pixel.
+
+        """
+        difference = np.hypot(stress[0] - stress[1], 2 * stress[2])
+        return difference * self.slab.width / self.camera.fringe_value
+
+    def render(
+        self, stress: np.ndarray, rng: np.random.Generator, *, led: bool = False
+    ) -> np.ndarray:
+        """One frame (height x width, uint8 or uint16) of the given stress field.
+
+        Parameters
+        ----------
+        stress
+            From :meth:`stress`.
+        rng
+            The camera noise's random stream.
+        led
+            Whether the sync LED is lit in this frame.
+
+        Returns
+        -------
+        numpy.ndarray
+            The frame.
+
+        """
+        camera = self.camera
+        image = np.full((camera.height, camera.width), camera.background)
+        image[self.interface_row :, :] = camera.flat
+        orders = self.fringe_order(stress)
+        image[self.inside] = camera.background + camera.intensity * np.sin(np.pi * orders) ** 2
+        if led:
+            image[3:9, 3:9] = 255.0
+        if camera.blur:
+            image = ndimage.gaussian_filter(image, camera.blur)
+        if camera.noise:
+            image = image + rng.normal(0.0, camera.noise, image.shape)
+        if camera.bits == 16:
+            return np.clip(np.round(image * 257.0), 0, 65535).astype(np.uint16)
+        return np.clip(np.round(image), 0, 255).astype(np.uint8)

@@ -1,0 +1,141 @@
+"""One settings path: each config key reaches exactly the stages that use it.
+
+Each key of the campaign config is changed in turn and the workflow's jobs are listed
+(a forced dry run): the rules whose command changes are the stages the setting reaches,
+and Snakemake reruns them and what follows from their products. The command's options
+then reach the library's functions (the library tests), and ``fit.json`` records the
+detection it used.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+
+from slipwave.cli import build_parser
+from slipwave.events import DetectionSettings
+
+ROOT = Path(__file__).parents[1]
+BIN = Path(sys.executable).parent
+ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
+
+DETECTING = {"detect", "fit", "simulate", "compare"}
+# config key (section, key, a value other than the default) -> the rules it reaches
+REACHES = [
+    ("detection", "threshold", 10.0, DETECTING),
+    ("detection", "max_spike", 3, DETECTING),
+    ("detection", "max_duration", 5.0, DETECTING),
+    ("detection", "min_fall_rate", 1.5, DETECTING),
+    ("detection", "edge_convention", "outward", DETECTING),
+    # each test's threshold comes from its simulation: the config's is not used
+    ("detection", "gross_edge_ratio", 1.2, set()),
+    ("video", "length_mm", 90.0, {"kymograph"}),
+    ("video", "band_mm", [0.5, 3.0], {"kymograph", "simulate"}),
+    ("fit", "laws", ["coulomb"], {"fit"}),
+    ("fit", "elements", 60, {"fit"}),
+    ("fit", "max_evaluations", 5, {"fit"}),
+    ("fit", "load_calibration", 0.01, {"fit"}),
+    ("map", "elements", 80, {"map_row"}),
+    ("map", "frictions", [0.2, 1.4, 0.02], {"map_row"}),
+    ("map", "normal_control", "displacement", {"map_row"}),
+    ("map", "normal_friction", True, {"map_row"}),
+    ("map", "min_zone_mm", 2.0, {"map_row"}),
+    ("map", "mem_mb", 2000, {"map_row"}),
+    (None, "cache_dir", "elsewhere", set()),
+]
+pytestmark = [pytest.mark.workflow, pytest.mark.slow]
+
+
+def _yaml(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, list):
+        return "[" + ", ".join(str(v) for v in value) + "]"
+    return str(value)
+
+
+def commands(workdir: Path, extra: str = "") -> dict[str, list[str]]:
+    """Every rule's shell commands in a forced dry run, with ``extra`` config appended."""
+    override = workdir / "override.yaml"
+    override.write_text(extra or "{}\n")
+    run = subprocess.run([str(BIN / "snakemake"), "-n", "-F", "-p", "--cores", "2",
+                          "--configfile", "config/config.yaml", str(override)],
+                         cwd=workdir, capture_output=True, text=True, timeout=300, env=ENV,
+                         check=False)
+    assert run.returncode == 0, run.stdout + run.stderr
+    found: dict[str, list[str]] = defaultdict(list)
+    rule = ""
+    for line in run.stdout.splitlines():
+        if match := re.match(r"^\s*(?:local)?rule (\w+):", line):
+            rule = match.group(1)
+        elif line.strip().startswith("Shell command: "):
+            found[rule].append(line.strip().removeprefix("Shell command: "))
+    return {name: sorted(lines) for name, lines in found.items()}
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("settings")
+    for name in ["Snakefile", "workflow", "config", "raw_data"]:
+        source = ROOT / name
+        (shutil.copytree if source.is_dir() else shutil.copy)(source, folder / name)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def default_commands(workdir: Path) -> dict[str, list[str]]:
+    return commands(workdir)
+
+
+@pytest.mark.parametrize(("section", "key", "value", "rules"), REACHES,
+                         ids=[f"{s}.{k}" if s else k for s, k, _, _ in REACHES])
+def test_a_setting_reaches_exactly_the_stages_that_use_it(workdir, default_commands, section,
+                                                          key, value, rules):
+    extra = (f"{section}:\n  {key}: {_yaml(value)}\n" if section
+             else f"{key}: {_yaml(value)}\n")
+    changed = commands(workdir, extra)
+    assert set(changed) == set(default_commands)
+    assert {name for name in changed if changed[name] != default_commands[name]} == rules
+
+
+def test_without_fits_the_gross_edge_ratio_reaches_detection_alone(workdir):
+    unfitted = "fit:\n  enabled: false\n"
+    before = commands(workdir, unfitted)
+    after = commands(workdir, unfitted + "detection:\n  gross_edge_ratio: 1.2\n")
+    assert {name for name in after if after[name] != before.get(name)} == {"detect"}
+    assert all("--gross-edge-ratio 1.2" in line for line in after["detect"])
+
+
+def test_every_schema_setting_is_tried():
+    from slipwave.validation import load_schema
+
+    schema = load_schema("config")["properties"]
+    tried = {(s, k) for s, k, _, _ in REACHES}
+    untried = {("map", "height_ratios"), ("map", "shard_size"), ("fit", "enabled")}  # jobs
+    for section in ("detection", "video", "fit", "map"):
+        for key in schema[section]["properties"]:
+            assert (section, key) in tried | untried, f"{section}.{key} is not tried"
+
+
+@pytest.mark.parametrize("command", ["detect", "fit", "simulate", "compare"])
+def test_every_detecting_command_takes_the_detection_settings(command):
+    arguments = {"detect": ["detect", "r.nc", "-o", "e.csv"],
+                 "fit": ["fit", "r.nc", "-o", "fit.json"],
+                 "simulate": ["simulate", "--fit", "fit.json", "-o", "s.nc"],
+                 "compare": ["compare", "e.nc", "--simulated", "s.nc", "--fit", "fit.json",
+                             "-o", "c.csv"]}[command]
+    args = build_parser().parse_args([*arguments, "--threshold", "11", "--max-spike", "4",
+                                      "--max-duration", "6", "--min-fall-rate", "1.7",
+                                      "--edge-convention", "outward"])
+    from slipwave.cli import _detection_settings
+
+    assert _detection_settings(args) == DetectionSettings(
+        threshold=11.0, max_spike=4, max_duration=6.0, min_fall_rate=1.7,
+        edge_convention="outward")
