@@ -4,13 +4,12 @@
 #
 # One stage, one name: rule <stage> lives in workflow/rules/<stage>.smk, runs
 # `slipwave <stage>` and its code is the module the README's stage table names.
-import os
-
 from snakemake.utils import min_version, validate
 
 from slipwave.map import friction_grid, shard_count
 from slipwave.validation import load_schema, schema_path
 from slipwave.campaign import (
+    cache_option,
     check_campaign,
     check_config_files,
     column_pairs,
@@ -35,13 +34,6 @@ check_config_files(
     command_line=workflow.overwrite_configfiles,
 )
 validate(config, str(schema_path("config")))
-# The slabs' condensations are kept for the next job in cache_dir: a side folder, not
-# an input, so it reaches the jobs through their environment and changing it reruns
-# nothing (no product depends on it).
-if config["cache_dir"]:
-    os.environ["SLIPWAVE_CACHE_DIR"] = os.path.abspath(config["cache_dir"])
-else:
-    os.environ.pop("SLIPWAVE_CACHE_DIR", None)
 campaign = read_campaign(config["tests"])
 # each row against the table's schema, errors naming the table's line
 check_campaign(config, campaign, load_schema("tests"))

@@ -68,3 +68,19 @@ def test_an_unexpected_exception_is_one_line_and_a_log(monkeypatch, tmp_path, ca
     assert err.count("\n") == 1 and "internal error (ZeroDivisionError: a bug)" in err
     log = next(tmp_path.glob("slipwave-crash-*.log"))
     assert "Traceback" in log.read_text() and str(log) in err
+
+
+def test_the_condensations_are_kept_only_where_a_folder_is_named(tmp_path, monkeypatch):
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.delenv("SLIPWAVE_CACHE_DIR", raising=False)
+    out = tmp_path / "out"
+    assert main(["simulate", "--fs", "1", "--elements", "8", "-o", str(out / "s.nc")]) == 0
+    assert [path.name for path in out.iterdir()] == ["s.nc"]
+    assert list(home.iterdir()) == []  # nothing under ~/.cache
+    kept = tmp_path / "kept"
+    assert main(["simulate", "--fs", "1", "--elements", "8", "-o", str(out / "s.nc"),
+                 "--cache-dir", str(kept)]) == 0
+    assert len(list(kept.glob("condensed-*.npz"))) == 1

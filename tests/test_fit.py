@@ -20,14 +20,14 @@ from slipwave.fit import (
     ROUGHNESS_STEP,
     SLIP_SIGMA,
     SlipFeatures,
-    _first_slip_match,
-    _intervals,
     edge_threshold,
     feature_residuals,
+    first_slip_match,
     fit_test,
     law_misfit,
     law_of,
     measured_events,
+    misfit_intervals,
     slip_features,
     split_edge_ratios,
 )
@@ -168,14 +168,14 @@ class _FirstSlipObjective:
 def test_a_weakening_start_moves_fs_until_its_first_slip_comes_at_the_tests():
     # the truth: fs 0.9 at Dc 0.1; Coulomb's fs, 1.1, reads it high
     objective = _FirstSlipObjective(target=0.1 + 0.6 * 0.9 + 0.5 * 0.1)
-    start = _first_slip_match(objective, (1.1, 0.6, 0.1))
+    start = first_slip_match(objective, (1.1, 0.6, 0.1))
     # first step at the nominal slope (1.2, twice the true one) halfway, then the
     # secant of the two runs all the way
     assert [theta[0] for theta in objective.cache] == pytest.approx([1.1, 1.0, 0.9])
     assert start == pytest.approx((0.9, 0.6, 0.1))
     # without a measured first slip there is nothing to match: the start as given
     blind = _FirstSlipObjective(target=float("nan"))
-    assert _first_slip_match(blind, (1.1, 0.6, 0.1)) == (1.1, 0.6, 0.1)
+    assert first_slip_match(blind, (1.1, 0.6, 0.1)) == (1.1, 0.6, 0.1)
     assert len(blind.cache) == 1
 
 
@@ -183,17 +183,17 @@ def test_a_weakening_start_stops_where_its_first_slip_does_not_follow_fs():
     # a first slip nearly blind to fs (slope 0.1: a gross slip where the test's first
     # was partial): one step at the nominal slope, then no wild secant step
     flat = _FirstSlipObjective(target=0.1 + 0.1 * 0.9 + 0.5 * 0.1, slope=0.1)
-    assert _first_slip_match(flat, (1.1, 0.6, 0.1)) == pytest.approx((1.1 - 0.02 / 1.2, 0.6,
+    assert first_slip_match(flat, (1.1, 0.6, 0.1)) == pytest.approx((1.1 - 0.02 / 1.2, 0.6,
                                                                       0.1))
     assert len(flat.cache) == 2
     # a first slip far above the test's: fs moves by at most FIRST_SLIP_REACH a step
     far = _FirstSlipObjective(target=0.1 + 0.6 * 0.5 + 0.5 * 0.1)
-    _first_slip_match(far, (1.2, 0.6, 0.1))
+    first_slip_match(far, (1.2, 0.6, 0.1))
     assert [theta[0] for theta in far.cache] == pytest.approx(
         [1.2, 1.2 - FIRST_SLIP_REACH, 1.2 - 2 * FIRST_SLIP_REACH])
     # a match asking for fs at or below fd is not run
     below = _FirstSlipObjective(target=0.1 + 0.6 * 0.5 + 0.5 * 0.1)
-    _first_slip_match(below, (0.8, 0.6, 0.1))
+    first_slip_match(below, (0.8, 0.6, 0.1))
     assert all(theta[0] > 0.6 for theta in below.cache)
 
 
@@ -219,7 +219,7 @@ def _quadratic_history() -> list[tuple[tuple[float, ...], float]]:
 
 def test_intervals_from_curvature_match_a_known_quadratic():
     history = _quadratic_history()
-    low, high, method = _intervals(history, (1.0, 0.6), 20.0, 40)
+    low, high, method = misfit_intervals(history, (1.0, 0.6), 20.0, 40)
     assert method == "curvature"
     assert 1.0 - low[0] == pytest.approx(high[0] - 1.0, rel=0.03)  # a symmetric quadratic
     # chi-square 20 over 38 degrees of freedom: no scaling; sigma 0.01 and 0.002
@@ -230,14 +230,14 @@ def test_intervals_from_curvature_match_a_known_quadratic():
 
 def test_intervals_widen_with_the_laws_mismatch_not_its_luckiest_misfit():
     history = _quadratic_history()
-    low, high, _ = _intervals(history, (1.0, 0.6), 20.0, 40)
+    low, high, _ = misfit_intervals(history, (1.0, 0.6), 20.0, 40)
     # neighbours four times the degrees of freedom: every half-width twice as wide
-    wide_low, wide_high, _ = _intervals(history, (1.0, 0.6), 20.0, 40, mismatch=4 * 38.0)
+    wide_low, wide_high, _ = misfit_intervals(history, (1.0, 0.6), 20.0, 40, mismatch=4 * 38.0)
     for k, centre in enumerate((1.0, 0.6)):
         assert wide_high[k] - centre == pytest.approx(2 * (high[k] - centre), rel=0.05)
         assert centre - wide_low[k] == pytest.approx(2 * (centre - low[k]), rel=0.05)
     # a mismatch within the noise changes nothing
-    assert _intervals(history, (1.0, 0.6), 20.0, 40, mismatch=30.0)[:2] == (low, high)
+    assert misfit_intervals(history, (1.0, 0.6), 20.0, 40, mismatch=30.0)[:2] == (low, high)
 
 
 def test_law_of_names_unknown_laws():

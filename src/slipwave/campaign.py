@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 from collections.abc import Iterable, Mapping
 from os import PathLike
 from pathlib import Path
@@ -141,6 +142,30 @@ def column_map(config: Mapping[str, Any], name: str) -> dict[str, str]:
         known = ", ".join(map(repr, maps)) or "none"
         raise ConfigError(f"column map {name!r} is not in the config's column_maps ({known})")
     return {str(k): str(v) for k, v in maps[name].items()}
+
+
+def cache_option(config: Mapping[str, Any]) -> str:
+    """The command-line option that names the config's ``cache_dir`` (none for null).
+
+    Parameters
+    ----------
+    config
+        The validated workflow config (``cache_dir`` filled in).
+
+    Returns
+    -------
+    str
+        ``--cache-dir FOLDER`` (quoted for a shell), or an empty string.
+
+    Examples
+    --------
+    >>> cache_option({"cache_dir": "results/my cache"})
+    "--cache-dir 'results/my cache'"
+    >>> cache_option({"cache_dir": None})
+    ''
+    """
+    folder = config["cache_dir"]
+    return f"--cache-dir {shlex.quote(str(folder))}" if folder else ""
 
 
 def column_pairs(config: Mapping[str, Any], name: str) -> list[str]:

@@ -71,35 +71,28 @@ TIME_SIGMA_S = 1.0
 SEQUENCE_SIGMA = 0.015
 """Uncertainty of the law's own making on T/|N| before slips. Under fs > fd the
 cascade settles into cycles whose peak T/|N| depends on which partial slips came
-before, and that changes by whole slips: 0.01 apart in fs, the median T/|N| before
-gross slips jumps by up to 0.03 about its trend (a scatter of 0.008 to 0.017 in two
-hidden tests of 280 s, H/L 0.36 and 0.71), the same for every gross slip of a run. No
-parameter then reproduces a test's sequence slip for slip, and the fit must not take a
-lucky sequence for the truth: a shift common to the gross slips' T/|N| before is a
-nuisance of this standard deviation, and the first slip's T/|N| is uncertain by as
-much. T/|N| after a gross slip has no such scatter (it is fd)."""
+before, and that changes by whole slips as the coefficients move, the same for every
+gross slip of a run. No parameter then reproduces a test's sequence slip for slip, and
+the fit must not take a lucky sequence for the truth: a shift common to the gross
+slips' T/|N| before is a nuisance of this standard deviation, and the first slip's
+T/|N| is uncertain by as much. T/|N| after a gross slip has no such scatter (it is
+fd)."""
 SLIP_SIGMA = 0.01
 """Uncertainty of the law's own making on each paired gross slip's T/|N| before, on top
 of :data:`SEQUENCE_SIGMA`'s offset common to them all: which partial slips came before
-a gross slip changes its own peak too (in a hidden run-in test of H/L 0.47 the true
-law's first two gross slips came 0.020 below and 0.015 above the measured ones, with
-the later ones, the counts and the times reproduced). Without it, a law that misses
-the whole sequence but shifts it as one (a shift the offset absorbs) could beat the
-truth on a test's first slips alone."""
+a gross slip changes its own peak too. Without it, a law that misses the whole
+sequence but shifts it as one (a shift the offset absorbs) could beat the truth on a
+test's first slips alone."""
 COUNT_SIGMA = 0.25
 """Relative uncertainty of the numbers of slips and of the gross slips' recurrence.
 For partial slips, several small slips of the model may fall in one detected drop and
 the smallest hide in the noise; for gross slips, the cycle the law settles in (see
-:data:`SEQUENCE_SIGMA`): 0.01 apart in fs, a test's 280 s held 12, 12, 12, 12, 7, 10,
-6, 7, 5, 5, 6 gross slips in one hidden test, 52, 39, 52, 60, 35, 40, 31, 33, 31, 44, 45
-in another."""
+:data:`SEQUENCE_SIGMA`), whose number of slips jumps as the coefficients move."""
 PARTIAL_DROP_SIGMA = 0.2
 """Relative uncertainty of the law's own making on the partial slips' median drop, on
 top of the measured median's standard error (:func:`median_error`): which partial
 slips merge into one detected drop, and how many there are, changes with the
-sequence. At the true laws of ten hidden tests the median came within 4 % of the
-measured one in eight, 12 % and 33 % off in the other two (RMS 11 %), where the
-measured medians' standard errors were 2 to 9 %."""
+sequence."""
 PAIRED_GROSS = 5
 """The first gross slips, whose T/|N| before is fitted one by one (a run-in's rise);
 the later ones by their quartiles, as T/|N| after all of them: paired in order they
@@ -109,12 +102,11 @@ ROUGHNESS_STEP = 0.002
 """How far, relative, the estimate's friction coefficients are moved together, down and
 up, to read the misfit's roughness where it is best: less than the load cells tell
 apart (their calibration, a scale of every T/|N|, is a nuisance of the misfit already).
-Under fs > fd the cycle a law settles in changes with coefficients this close: in ten
-hidden tests the true law's misfit on its own setup, 1.0 at the truth in nine, was 0.6
-to 134 (median 18) with its coefficients 0.2 % lower or higher (bench_fit.py). A
-search that tries some hundred laws therefore ends on the luckiest of many equally
-plausible cycles, and its misfit understates the law's mismatch; its neighbours'
-misfits do not, and they scale the intervals (:func:`fit_law`)."""
+Under fs > fd the cycle a law settles in changes with coefficients this close, and
+with it the misfit (by orders of magnitude; ``benchmarks/RESULTS.md``). A search that
+tries some hundred laws therefore ends on the luckiest of many equally plausible
+cycles, and its misfit understates the law's mismatch; its neighbours' misfits do not,
+and they scale the intervals (:func:`fit_law`)."""
 REJECTED_AIC = 10.0
 """A law whose AIC exceeds the best one's by more is rejected (Burnham & Anderson: no
 support)."""
@@ -167,10 +159,9 @@ quasi-static solver has no time): it sets a drop's duration, as the virtual benc
 
 ALIKE_EDGE_RATIO = 0.9
 """A partial slip whose DG/DD ratio is this fraction of the gross slips' median or more
-moves the edges as they do: :func:`split_edge_ratios` leaves it out. On hl025 of the
-default campaign (H/L 0.25, gross slips' DG/DD 1.05 to 1.11), a coarse Coulomb fit's
-simulation held one partial slip at 1.099 against its gross slips' 1.105; a threshold
-between the two, 1.10, called 37 of the 38 measured gross slips partial."""
+moves the edges as they do: :func:`split_edge_ratios` leaves it out, since a threshold
+between it and the gross slips would call most measured gross slips partial on a short
+slab, whose gross slips' ratios lie close together."""
 
 
 def edge_threshold(simulation: xr.Dataset, *, edge_reference: str = "frame") -> float:
@@ -182,9 +173,8 @@ def edge_threshold(simulation: xr.Dataset, *, edge_reference: str = "frame") -> 
     half the median if no partial slip moves the far edge. The median, not the
     smallest gross ratio: the first gross slips start from the normal loading's
     stress state, not a stick-slip cycle's, and move the far edge less; in a law fitted
-    coarsely the first can come down among the partial slips (hl075 of the default
-    campaign: 0.70 against 2.0 for the others and 0.69 for the largest partial), and a
-    threshold at the smallest would call the measured partial slips gross. (A partial
+    coarsely the first can come down among the partial slips, and a threshold at the
+    smallest would call the measured partial slips gross. (A partial
     slip that stops just short of the far edge moves it as a gross slip does: it cannot
     be told by the edges, and is left out.) Jumps are along +x, in the frame the edge
     sensors read against: ``flat`` subtracts the flat's jump (the sensors then see the
@@ -294,11 +284,9 @@ def detected_edge_threshold(simulation: xr.Dataset, setup: TestSetup, *, min_dro
     solver's gross slips falls in it, and :func:`split_edge_ratios` sets the
     threshold between the two. Read this way, not per load step
     (:func:`edge_threshold`), because detection measures each edge's jump over the
-    whole event, partial slips that follow each other within it included: on hl075
-    of the default campaign the two readings of its fitted law put the threshold at
-    1.12 and 0.92, and only the first lies between its measured partial slips
-    (DG/DD up to 1.05) and gross slips (1.6 and up). (Its simulated partial slips move
-    the far edge by a tenth to a sixth of what its gross slips do: ``shows`` is a tenth.)
+    whole event, partial slips that follow each other within it included, and the
+    threshold must lie between the measured partial and gross slips as detection reads
+    them.
 
     Parameters
     ----------
@@ -691,8 +679,8 @@ class LawFit:
         Time the fit took.
     interval_method
         ``secant`` (the Gauss-Newton covariance of the residuals' secant slopes,
-        joined with :func:`_intervals`' region), or ``curvature``, ``axes``,
-        ``evaluations`` (:func:`_intervals`) when a secant could not be run.
+        joined with :func:`misfit_intervals`' region), or ``curvature``, ``axes``,
+        ``evaluations`` (:func:`misfit_intervals`) when a secant could not be run.
     edge_threshold
         The gross/partial edge-jump ratio of the simulation at the estimate.
     nearby_misfit
@@ -742,18 +730,36 @@ class LawFit:
                                   for value in self.nearby_misfit]}
 
 
-class _Objective:
+class LawObjective:
     """The misfit of one law on one test, its simulations cached by parameters.
 
     Gross slips are told from partial ones by one edge threshold for the whole fit
     (``threshold``), so that every law is judged on the same measured features.
+
+    Parameters
+    ----------
+    setup, measured, law, elements, threshold, calibration_error, detection
+        As in :func:`fit_law`.
+    cache
+        The solver's cache, shared by the law's simulations.
+
+    Attributes
+    ----------
+    measured
+        The measured features (:class:`SlipFeatures`).
+    features
+        The simulated features by (clipped) parameters.
+    cache
+        The misfit by (clipped) parameters.
+    history
+        Every (parameters, misfit) evaluated, in order.
     """
 
     def __init__(self, setup: TestSetup, measured: pd.DataFrame, law: str, elements: int,
                  threshold: float, calibration_error: float, detection: DetectionSettings,
                  cache: SolverCache):
         self.setup, self.law, self.elements = setup, law, elements
-        self.detection, self.cache_of_solver = detection, cache
+        self.detection, self.solver_cache = detection, cache
         self.slab, self.path = setup.slab(elements), setup.load_path()
         self.calibration_error = calibration_error
         self.names = LAWS[law]
@@ -767,6 +773,19 @@ class _Objective:
         self.cache: dict[tuple[float, ...], float] = {}
 
     def clip(self, theta: Sequence[float]) -> tuple[float, ...]:
+        """The parameters within their bounds and the law's order (fd below fs).
+
+        Parameters
+        ----------
+        theta
+            The law's parameters, in :data:`LAWS`' order.
+
+        Returns
+        -------
+        tuple of float
+            Clipped and rounded to 1e-6: the key of :attr:`cache`.
+
+        """
         values = dict(zip(self.names, (float(v) for v in theta), strict=True))
         for name, (low, high) in BOUNDS.items():
             if name in values:
@@ -778,15 +797,41 @@ class _Objective:
         return tuple(round(values[name], 6) for name in self.names)
 
     def simulated(self, theta: tuple[float, ...]) -> SlipFeatures:
+        """The features of the law's simulation at ``theta``.
+
+        Parameters
+        ----------
+        theta
+            Clipped parameters (:meth:`clip`).
+
+        Returns
+        -------
+        SlipFeatures
+            Its slips, detected as the measurement's.
+
+        """
         params = dict(zip(self.names, theta, strict=True))
         simulation = simulate(self.slab, law_of(self.law, params), self.path,
-                              cache=self.cache_of_solver)
+                              cache=self.solver_cache)
         events = simulated_events(simulation, self.setup, min_drop=self.sizes["min_drop"],
                                   sample_rate=self.sizes["sample_rate"],
                                   detection=self.detection)
         return slip_features(events, gross_edge_ratio=self.threshold, **self.sizes)
 
     def __call__(self, theta: Sequence[float]) -> float:
+        """The misfit at ``theta`` (inf where the solver cannot follow the law).
+
+        Parameters
+        ----------
+        theta
+            The law's parameters, in :data:`LAWS`' order (clipped first).
+
+        Returns
+        -------
+        float
+            The sum of the squared residuals (:func:`feature_residuals`).
+
+        """
         key = self.clip(theta)
         if key not in self.cache:
             try:
@@ -827,7 +872,7 @@ def law_misfit(setup: TestSetup, measured: pd.DataFrame, law: str,
         solver cannot follow the law.
 
     """
-    objective = _Objective(setup, measured, law, elements, threshold, calibration_error,
+    objective = LawObjective(setup, measured, law, elements, threshold, calibration_error,
                            detection, cache or SolverCache())
     return objective(tuple(float(params[name]) for name in LAWS[law]))
 
@@ -878,7 +923,7 @@ def _first_slip_fs(runs: Mapping[tuple[float, ...], SlipFeatures], target: float
     return found
 
 
-def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
+def _starts(law: str, objective: LawObjective, measured: pd.DataFrame,
             previous: Mapping[str, LawFit], scan: Mapping[tuple[float, ...], SlipFeatures]
             ) -> Sequence[tuple[float, ...]]:
     """Starting points of a law's search.
@@ -891,7 +936,7 @@ def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
     scanned Coulomb run whose gross slips match the measured later ones, and around
     the number of slips until the measured T/|N| settles (without a first slip, a scan
     of fs below fs_final). Slip-weakening: Coulomb's fd with a few Dc, each with the fs
-    that puts its first slip at the test's (:func:`_first_slip_match`). A law fitted
+    that puts its first slip at the test's (:func:`first_slip_match`). A law fitted
     without Coulomb before it starts from the same scan of fs, as its Coulomb limit (no
     run-in, Dc 0.03 mm).
     """
@@ -929,21 +974,21 @@ def _starts(law: str, objective: _Objective, measured: pd.DataFrame,
     # (Coulomb's fs was 4 %, 7 %, 17 % and 32 % above the truth in four slip-weakening
     # tests of Dc 0.05-0.2 mm). Each Dc therefore starts from the fs that puts its
     # first slip where the test's was; 0.01 mm, nearly Coulomb, from Coulomb's fs.
-    return [(fs, fd, 0.01)] + [_first_slip_match(objective, (fs, fd, dc))
+    return [(fs, fd, 0.01)] + [first_slip_match(objective, (fs, fd, dc))
                                for dc in (0.03, 0.1, 0.3)]
 
 
 FIRST_SLIP_SLOPE = 1.2
 """How T/|N| before a test's first slip rises with fs (about 1.2 per unit on 80
-elements, :class:`SlipFeatures`): the first step of :func:`_first_slip_match`."""
+elements, :class:`SlipFeatures`): the first step of :func:`first_slip_match`."""
 
 FIRST_SLIP_REACH = 0.2
-"""The largest move of fs in one step of :func:`_first_slip_match` (Coulomb's fs read
+"""The largest move of fs in one step of :func:`first_slip_match` (Coulomb's fs read
 a weakening law's 0.04-0.28 high in four tests: two steps cover it)."""
 
 
-def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
-                      steps: int = 2) -> tuple[float, ...]:
+def first_slip_match(objective: LawObjective, theta: tuple[float, ...], *,
+                     steps: int = 2) -> tuple[float, ...]:
     """The parameters, fs moved by secant steps, whose first slip comes at the test's.
 
     The first slip's T/|N| (:attr:`SlipFeatures.first_ratio`) is matched, since it is
@@ -954,6 +999,22 @@ def _first_slip_match(objective: _Objective, theta: tuple[float, ...], *,
     for fs at or below fd, and each step moves fs by at most :data:`FIRST_SLIP_REACH`.
     Returns the run of lowest misfit among those tried (``theta`` itself without a
     measured or simulated first slip).
+
+    Parameters
+    ----------
+    objective
+        The law's misfit on the test (what it reads: :meth:`LawObjective.clip`, its
+        call, ``measured``, ``features`` and ``cache``).
+    theta
+        The start: fs first, then the law's other parameters.
+    steps
+        Secant steps at most.
+
+    Returns
+    -------
+    tuple of float
+        The parameters tried of lowest misfit.
+
     """
     target = objective.measured.first_ratio
     tried = [objective.clip(theta)]
@@ -1037,7 +1098,7 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
 
     """
     began = clock.perf_counter()
-    objective = _Objective(setup, measured, law, elements, threshold, calibration_error,
+    objective = LawObjective(setup, measured, law, elements, threshold, calibration_error,
                            detection, cache or SolverCache())
     starts = _starts(law, objective, measured, previous or {}, scan or {})
     best = min(starts, key=objective)
@@ -1089,7 +1150,7 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     # the law's mismatch: its neighbours' misfit, not the luckiest cycle's (ROUGHNESS_STEP)
     followed = [value for value in nearby if np.isfinite(value)]
     mismatch = max(misfit, float(np.mean(followed))) if followed else misfit
-    low, high, method = _intervals(history, theta, misfit, features, mismatch=mismatch)
+    low, high, method = misfit_intervals(history, theta, misfit, features, mismatch=mismatch)
     # A scale error common to both load cells multiplies every T/|N|, hence every
     # coefficient, alike: its 95 % range, independent of the fit's own error.
     calibration = np.array([abs(value) * 1.96 * np.sqrt(2.0) * calibration_error
@@ -1119,7 +1180,7 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     return fit
 
 
-def _nearby(objective: _Objective) -> tuple[tuple[float, ...], tuple[float, float]]:
+def _nearby(objective: LawObjective) -> tuple[tuple[float, ...], tuple[float, float]]:
     """The best law tried, and its misfits with its coefficients moved apart.
 
     The friction coefficients move together by :data:`ROUGHNESS_STEP`, down and up. A
@@ -1164,9 +1225,9 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *,
                                    detection=detection)
 
 
-def _intervals(history: list[tuple[tuple[float, ...], float]], best: tuple[float, ...],
-               misfit: float, features: int, *, mismatch: float | None = None
-               ) -> tuple[list[float], list[float], str]:
+def misfit_intervals(history: list[tuple[tuple[float, ...], float]],
+                     best: tuple[float, ...], misfit: float, features: int, *,
+                     mismatch: float | None = None) -> tuple[list[float], list[float], str]:
     """95 % intervals of the parameters: the misfit's curvature, and where it rises.
 
     Two estimates, and each interval covers both. (1) A quadratic in the parameters
@@ -1180,6 +1241,26 @@ def _intervals(history: list[tuple[tuple[float, ...], float]], best: tuple[float
     misfit, see :data:`ROUGHNESS_STEP`; by default the best one) per degree of freedom.
     The misfit is rough at the scale of one partial slip more or less, so a curvature
     can be steeper than the rise it predicts; the union keeps the interval honest.
+
+    Parameters
+    ----------
+    history
+        Every (parameters, misfit) evaluated.
+    best
+        The optimum's parameters.
+    misfit
+        The optimum's misfit.
+    features
+        How many features the misfit sums.
+    mismatch
+        The law's typical misfit; ``None``: ``misfit``.
+
+    Returns
+    -------
+    tuple
+        The lower and upper bounds, one per parameter, and how the curvature was read
+        (``curvature``, ``axes`` or ``evaluations``).
+
     """
     points = np.array([theta for theta, _ in history])
     values = np.array([value for _, value in history])

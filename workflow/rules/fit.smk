@@ -18,6 +18,7 @@ rule fit:
         max_evaluations=config["fit"]["max_evaluations"],
         load_calibration=config["fit"]["load_calibration"],
         detection=detection_options,
+        cache=cache_option(config),
     threads: 1
     resources:
         mem_mb=scaled_memory(1500),
@@ -28,6 +29,6 @@ rule fit:
         "slipwave fit {input:q} -o {output:q} --test-id {wildcards.test_id:q} "
         "--setting {params.settings} --laws {params.laws} --elements {params.elements} "
         "--max-evaluations {params.max_evaluations} "
-        "--load-calibration {params.load_calibration} {params.detection} "
+        "--load-calibration {params.load_calibration} {params.detection} {params.cache} "
         "> {log:q} 2>&1"
 

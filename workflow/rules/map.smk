@@ -15,6 +15,7 @@ rule map_row:
         settings=map_row_options,
         shard_size=config["map"]["shard_size"],
         memory_gb=lambda wildcards, resources: resources.mem_mb / 1000,
+        cache=cache_option(config),
     group:
         "map_rows"
     threads: 1
@@ -27,7 +28,7 @@ rule map_row:
         "slipwave map row --height-ratio {wildcards.height_ratio} "
         "--frictions {params.frictions} {params.settings} --shard {wildcards.shard} "
         "--shard-size {params.shard_size} --memory-limit {params.memory_gb} "
-        "-o {output:q} > {log:q} 2>&1"
+        "{params.cache} -o {output:q} > {log:q} 2>&1"
 
 
 rule map_assemble:
@@ -71,6 +72,7 @@ rule map_figures:
         "results/logs/map/map_figures.log",
     params:
         tests=" ".join(height_ratio_pairs(campaign)),
+        cache=cache_option(config),
     threads: 1
     resources:
         mem_mb=scaled_memory(3000),
@@ -80,4 +82,4 @@ rule map_figures:
     shell:
         "slipwave map figures {input.map:q} --figure {output.figure:q} "
         "--zones {output.zones:q} --summary {input.summary:q} --test-ratio {params.tests} "
-        "> {log:q} 2>&1"
+        "{params.cache} > {log:q} 2>&1"

@@ -14,6 +14,7 @@ rule simulate:
     params:
         band=config["video"]["band_mm"],
         detection=detection_options,
+        cache=cache_option(config),
     threads: 1
     resources:
         mem_mb=scaled_memory(1500),
@@ -23,5 +24,5 @@ rule simulate:
     shell:
         "slipwave simulate --fit {input:q} -o {output.recording:q} "
         "--contact {output.contact:q} --steps {output.steps:q} --scatter {output.scatter:q} "
-        "--band {params.band[0]} {params.band[1]} {params.detection} "
+        "--band {params.band[0]} {params.band[1]} {params.detection} {params.cache} "
         "> {log:q} 2>&1"

@@ -1,0 +1,84 @@
+"""Run every benchmark and write what it measured to ``benchmarks/RESULTS.md``.
+
+Each ``bench_*.py`` runs as its own process, one after the other; its output (the
+figures and each target's verdict) goes to the terminal and to the results file, with
+the machine's load before and after it, its wall time and its exit status. The file is
+written whole at the end (a run stopped half-way leaves the previous one), and the run
+fails when any benchmark missed a target.
+
+Run: make bench  (or python benchmarks/run_all.py [bench_map.py ...])
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).parent
+RESULTS = HERE / "RESULTS.md"
+
+
+def _commit() -> str:
+    found = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=HERE,
+                           capture_output=True, text=True, check=False)
+    return found.stdout.strip() or "unknown"
+
+
+def _load() -> str:
+    return " ".join(f"{value:.2f}" for value in os.getloadavg())
+
+
+def run(bench: Path) -> tuple[str, bool]:
+    """One benchmark's section of the results, and whether it met its targets."""
+    before = _load()
+    began = time.perf_counter()
+    process = subprocess.Popen([sys.executable, str(bench)], cwd=HERE.parent, text=True,
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    lines = []
+    assert process.stdout is not None
+    for line in process.stdout:
+        print(line, end="", flush=True)
+        lines.append(line.rstrip("\n"))
+    status = process.wait()
+    seconds = time.perf_counter() - began
+    verdict = "met its targets" if status == 0 else f"MISSED (exit status {status})"
+    section = [f"## {bench.name}", "",
+               f"{verdict}; {seconds:.0f} s wall; load average (1, 5, 15 min) {before} "
+               f"before, {_load()} after.", "", "```", *lines, "```", ""]
+    return "\n".join(section), status == 0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("benches", nargs="*", help="bench_*.py files (default: every one)")
+    args = parser.parse_args()
+    benches = ([HERE / name for name in args.benches] if args.benches
+               else sorted(HERE.glob("bench_*.py")))
+    started = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    header = ["# Benchmark results", "",
+              "Written by `make bench` (`benchmarks/run_all.py`); do not edit by hand.", "",
+              f"- run: {started}, commit {_commit()}",
+              f"- machine: {os.cpu_count()} cores, {platform.machine()}, Python "
+              f"{platform.python_version()}, {platform.platform()}", ""]
+    sections, met = [], True
+    for bench in benches:
+        print(f"== {bench.name}", flush=True)
+        section, ok = run(bench)
+        sections.append(section)
+        met &= ok
+    temporary = RESULTS.with_suffix(".md.part")
+    temporary.write_text("\n".join(header + sections))
+    temporary.replace(RESULTS)
+    print(f"-> {RESULTS}")
+    if not met:
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
