@@ -15,7 +15,7 @@ from slipwave.validation import check, read_yaml
 
 SETUP_COLUMNS = ("length_mm", "height_mm", "width_mm", "youngs_modulus_mpa", "poisson_ratio",
                  "normal_load_n", "speed_mm_s", "machine_stiffness_n_mm", "edge_reference")
-"""Columns of a test's configuration for its simulation (slipwave.bench.setup)."""
+"""Columns of a test's configuration for its simulation (:mod:`slipwave.setup`)."""
 
 OPTIONAL_COLUMNS = ("frames", "columns", "fps", "edge_convention", "height_ratio",
                     *SETUP_COLUMNS)
@@ -247,7 +247,7 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
     campaign
         From :func:`read_campaign`.
     schema
-        The table's schema (``workflow/schemas/tests.schema.json``): each row
+        The table's schema (``slipwave/schemas/tests.schema.json``): each row
         is checked against it, and an error names the table's file and line.
 
     Raises
@@ -284,7 +284,7 @@ def check_config_files(paths: Iterable[str | PathLike[str]],
     paths
         Every config file (the workflow's own and the command line's).
     schema
-        ``workflow/schemas/config.schema.json``; ``None``: only the rule on ``tests``.
+        ``slipwave/schemas/config.schema.json``; ``None``: only the rule on ``tests``.
     command_line
         The ``--configfile`` files (Snakemake's ``workflow.overwrite_configfiles``).
 

@@ -667,7 +667,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "calibration apart and write their compared features (CSV), the "
                      "simulation's own scatter for 'slipwave compare --scatter'")
     sim.add_argument("--fd", type=float, default=None, help="dynamic coefficient (fs)")
-    _load_path_arguments(sim, normal_control="displacement", normal_friction="on")
+    _load_path_arguments(sim, normal_control=default.NORMAL_CONTROL,
+                         normal_friction="on" if default.NORMAL_FRICTION else "off")
     sim.add_argument("--max-travel", type=float, default=None,
                      help="go on past gross sliding up to this flat travel, mm")
     sim.add_argument("--travel-step", type=float, default=None,

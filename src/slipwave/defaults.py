@@ -12,7 +12,7 @@ Units are the project's: mm, N, MPa, s.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Final
 
 from slipwave.validation import load_schema
 
@@ -42,6 +42,12 @@ NORMAL_LOAD_N = 76.0
 """Normal load imposed before the tangential loading in the paper's numerical study, N."""
 TANGENTIAL_STEP_N = 2.0
 """Tangential load increment of the paper's numerical study, N."""
+NORMAL_CONTROL: Final = "displacement"
+"""What a load path holds after the normal loading by default: the flat's normal
+position (the bench's step 2); ``force`` holds N."""
+NORMAL_FRICTION = True
+"""Whether friction acts during a load path's normal loading by default (the flat is
+pressed with friction, as on the bench)."""
 TRAVEL_STEP_MM = 0.03
 """The actuator's travel per load step when a test is driven through its machine, mm."""
 BENCH_ELEMENTS = 160

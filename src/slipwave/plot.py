@@ -559,7 +559,7 @@ def plot_pairing(recording: xr.Dataset, simulated: xr.Dataset, events: xr.Datase
     recording
         The measured recording.
     simulated
-        The simulated recording (:func:`slipwave.bench.replay.replay_test`).
+        The simulated recording (:func:`slipwave.simulate.replay_test`).
     events
         The measured ``events.nc``, or ``None``.
     simulated_events

@@ -9,7 +9,13 @@ import numpy as np
 import xarray as xr
 
 from slipwave import __version__
-from slipwave.defaults import CONVENTIONS, NORMAL_LOAD_N, TANGENTIAL_STEP_N
+from slipwave.defaults import (
+    CONVENTIONS,
+    NORMAL_CONTROL,
+    NORMAL_FRICTION,
+    NORMAL_LOAD_N,
+    TANGENTIAL_STEP_N,
+)
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.solver.cache import SolverCache
 from slipwave.solver.contact import OPEN, STICK, Body, Control, Increment, NotConverged
@@ -176,13 +182,13 @@ class LoadPath:
     normal_load: float = NORMAL_LOAD_N
     tangential_step: float = TANGENTIAL_STEP_N
     normal_steps: int = 5
-    normal_control: Literal["displacement", "force"] = "displacement"
+    normal_control: Literal["displacement", "force"] = NORMAL_CONTROL
     max_travel: float | None = None
     travel_step: float | None = None
     machine_stiffness: float | None = None
     max_tangential_load: float | None = None
     max_steps: int = 5000
-    normal_friction: bool = True
+    normal_friction: bool = NORMAL_FRICTION
 
     def __post_init__(self) -> None:
         if not (self.normal_load > 0 and self.tangential_step > 0 and self.normal_steps >= 1):
