@@ -7,9 +7,11 @@ import pytest
 import xarray as xr
 
 from slipwave.errors import SlipwaveError
-from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, simulate
 from slipwave.solver.simulate import RESIDUAL_TOLERANCE
 from slipwave.solver.slab import condense
+
+CACHE = SolverCache()  # the slabs of this file, condensed once
 
 MACHINE = 100.0  # N/mm
 SLAB = Slab(height=40.0, elements=80)
@@ -19,7 +21,7 @@ SLAB = Slab(height=40.0, elements=80)
 def driven() -> xr.Dataset:
     path = LoadPath(normal_load=85.0, normal_control="force", machine_stiffness=MACHINE,
                     max_travel=5.0, travel_step=0.04)
-    return simulate(SLAB, Coulomb(fs=1.0, fd=0.85), path)
+    return simulate(SLAB, Coulomb(fs=1.0, fd=0.85), path, cache=CACHE)
 
 
 def test_spring_law_every_step(driven):
@@ -57,7 +59,7 @@ def test_before_wave_equals_after_without_a_wave(driven):
 
 
 def test_sensors_follow_the_contact_displacements(driven):
-    sensors = condense(SLAB).sensors
+    sensors = condense(SLAB, cache=CACHE).sensors
     u = np.concatenate([driven["ux"].values, driven["uy"].values], axis=1)
     np.testing.assert_allclose(u @ sensors[0], driven["DG"].values, rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(u @ sensors[1], driven["DD"].values, rtol=1e-10, atol=1e-12)

@@ -7,10 +7,12 @@ import pytest
 import xarray as xr
 
 from slipwave.io import read_dataset, write_dataset
-from slipwave.solver import Coulomb, LoadPath, Slab, describe_behaviour, simulate
+from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, describe_behaviour, simulate
 from slipwave.solver.contact import OPEN, SLIP, STICK, Body, Control, KeptSolves
 from slipwave.solver.simulate import RESIDUAL_TOLERANCE
 from slipwave.solver.slab import condense
+
+CACHE = SolverCache()  # the slabs of this file, condensed once
 
 E, NU, WIDTH, LOAD = 7.0, 0.48, 10.0, 76.0
 E_STAR = E / (1 - NU**2)
@@ -34,11 +36,12 @@ def last_normal(ds: xr.Dataset) -> int:
 
 @pytest.fixture(scope="module")
 def bench_case() -> xr.Dataset:
-    return simulate(Slab(height=40.0), Coulomb(fs=1.0), LoadPath())
+    return simulate(Slab(height=40.0), Coulomb(fs=1.0), LoadPath(), cache=CACHE)
 
 
 def test_hertz_frictionless():
-    ds = simulate(hertz_slab(), Coulomb(fs=0.0), LoadPath(normal_load=LOAD, normal_steps=4))
+    ds = simulate(hertz_slab(), Coulomb(fs=0.0), LoadPath(normal_load=LOAD, normal_steps=4),
+                  cache=CACHE)
     k = last_normal(ds)
     x = ds["x"].values
     a = np.sqrt(4 * P_LINE * RADIUS / (np.pi * E_STAR))
@@ -55,7 +58,7 @@ def test_cattaneo_stick_zone(ratio):
     f = 0.5
     path = LoadPath(normal_load=LOAD, normal_steps=4, normal_control="force",
                     tangential_step=ratio * f * LOAD)
-    ds = simulate(hertz_slab(), Coulomb(fs=f), path)
+    ds = simulate(hertz_slab(), Coulomb(fs=f), path, cache=CACHE)
     x = ds["x"].values
     a = half_width(ds["state"].values[last_normal(ds)] != 0, x)
     k = int(np.flatnonzero(ds["phase"].values == "tangential")[0])
@@ -69,7 +72,7 @@ def test_cattaneo_stick_zone(ratio):
 @pytest.mark.parametrize("control", ["displacement", "force"])
 def test_statics_every_step(control):
     ds = simulate(Slab(height=40.0), Coulomb(fs=0.8, fd=0.7),
-                  LoadPath(normal_control=control, max_travel=1.6))
+                  LoadPath(normal_control=control, max_travel=1.6), cache=CACHE)
     tributary = ds["tributary_length"]
     np.testing.assert_allclose((ds["p"] * tributary).sum("x") * WIDTH, ds["N"], rtol=1e-12)
     np.testing.assert_allclose((ds["q"] * tributary).sum("x") * WIDTH, ds["T"], rtol=1e-9,
@@ -87,7 +90,7 @@ def test_statics_every_step(control):
 @pytest.mark.parametrize("f", [0.3, 0.6, 1.0])
 @pytest.mark.parametrize("control", ["displacement", "force"])
 def test_gross_sliding_ratio_equals_f(f, control):
-    ds = simulate(Slab(height=40.0), Coulomb(fs=f), LoadPath(normal_control=control))
+    ds = simulate(Slab(height=40.0), Coulomb(fs=f), LoadPath(normal_control=control), cache=CACHE)
     assert ds.attrs["gross_sliding"] == "reached"
     assert str(ds["wave"].values[-1]) == "gross"
     T, N = float(ds["T"][-1]), float(ds["N"][-1])
@@ -100,7 +103,7 @@ def test_gross_sliding_ratio_equals_f(f, control):
 
 def test_mirror_symmetry_after_normal_loading():
     for f in (0.2, 1.0):
-        ds = simulate(Slab(height=40.0), Coulomb(fs=f), LoadPath(normal_steps=5))
+        ds = simulate(Slab(height=40.0), Coulomb(fs=f), LoadPath(normal_steps=5), cache=CACHE)
         k = last_normal(ds)
         state = ds["state"].values[k]
         np.testing.assert_array_equal(state, state[::-1])
@@ -114,9 +117,9 @@ def test_mirror_symmetry_after_normal_loading():
 def test_proportional_normal_loading_one_or_ten_steps(f):
     # the normal loading alone (a cap below the first tangential step)
     one = simulate(Slab(height=40.0), Coulomb(fs=f), LoadPath(normal_steps=1,
-                                                             max_tangential_load=1.0))
+                                                             max_tangential_load=1.0), cache=CACHE)
     ten = simulate(Slab(height=40.0), Coulomb(fs=f), LoadPath(normal_steps=10,
-                                                             max_tangential_load=1.0))
+                                                             max_tangential_load=1.0), cache=CACHE)
     a, b = last_normal(one), last_normal(ten)
     np.testing.assert_array_equal(one["state"].values[a], ten["state"].values[b])
     np.testing.assert_allclose(one["p"].values[a], ten["p"].values[b], rtol=1e-8, atol=1e-12)
@@ -125,11 +128,11 @@ def test_proportional_normal_loading_one_or_ten_steps(f):
 
 def test_zero_friction_is_the_frictionless_solution():
     slab = Slab(height=40.0)
-    ds = simulate(slab, Coulomb(fs=0.0), LoadPath())
+    ds = simulate(slab, Coulomb(fs=0.0), LoadPath(), cache=CACHE)
     k = last_normal(ds)
     assert np.abs(ds["q"].values).max() <= 1e-12 * np.abs(ds["p"].values).max()
     # The frictionless solution, solved directly: every node free to slide.
-    condensed = condense(slab)
+    condensed = condense(slab, cache=CACHE)
     body = Body(condensed.stiffness, slab.initial_gap())
     n = body.n
     u, _, _ = body.solve_linear(np.full(n, SLIP, dtype=np.int8), np.zeros(n), np.zeros(n),
@@ -143,7 +146,7 @@ def test_large_friction_sticks_during_normal_loading(bench_case):
     # Normal loading only (a load cap below the first step): at f = 5 the tangential
     # phase leaves the range where the discrete Coulomb problem has a solution.
     ds = simulate(Slab(height=40.0), Coulomb(fs=5.0),
-                  LoadPath(normal_steps=5, max_tangential_load=1.0))
+                  LoadPath(normal_steps=5, max_tangential_load=1.0), cache=CACHE)
     normal = ds["phase"].values == "normal"
     assert normal.all()
     assert np.all(ds["state"].values[normal] == STICK)
@@ -151,7 +154,7 @@ def test_large_friction_sticks_during_normal_loading(bench_case):
 
 
 def test_small_friction_slips_at_the_edges():
-    ds = simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath())
+    ds = simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath(), cache=CACHE)
     normal = ds["state"].values[ds["phase"].values == "normal"][-1]
     direction = ds["slip_direction"].values[ds["phase"].values == "normal"][-1]
     left, right = int(np.argmin(normal == SLIP)), int(np.argmin(normal[::-1] == SLIP))
@@ -160,8 +163,8 @@ def test_small_friction_slips_at_the_edges():
 
 
 def test_mesh_convergence():
-    coarse = simulate(Slab(height=40.0, elements=160), Coulomb(fs=1.0), LoadPath())
-    fine = simulate(Slab(height=40.0, elements=320), Coulomb(fs=1.0), LoadPath())
+    coarse = simulate(Slab(height=40.0, elements=160), Coulomb(fs=1.0), LoadPath(), cache=CACHE)
+    fine = simulate(Slab(height=40.0, elements=320), Coulomb(fs=1.0), LoadPath(), cache=CACHE)
     assert float(fine["T"][-1]) == pytest.approx(float(coarse["T"][-1]), rel=0.01)
     element = 80.0 / 160
     # Zone boundaries at equal T (the load steps are the same): the open zone's
@@ -179,7 +182,7 @@ def test_mesh_convergence():
 @pytest.mark.parametrize("hl", [0.1, 0.5, 1.0, 1.5])
 @pytest.mark.parametrize("f", [0.1, 0.5, 1.0, 1.4])
 def test_residual_grid(hl, f):
-    ds = simulate(Slab(height=80.0 * hl), Coulomb(fs=f), LoadPath())
+    ds = simulate(Slab(height=80.0 * hl), Coulomb(fs=f), LoadPath(), cache=CACHE)
     assert float(ds["residual"].max()) < RESIDUAL_TOLERANCE
     assert ds.sizes["step"] > 5
 
@@ -207,7 +210,7 @@ def test_bench_configuration_opens_right_then_slips_inside(bench_case):
 
 def test_stick_slip_cycles_with_partial_waves_first():
     ds = simulate(Slab(height=40.0), Coulomb(fs=1.0, fd=0.8),
-                  LoadPath(normal_control="force", max_travel=3.5))
+                  LoadPath(normal_control="force", max_travel=3.5), cache=CACHE)
     wave = ds["wave"].values
     gross = np.flatnonzero(wave == "gross")
     assert gross.size >= 3
@@ -225,9 +228,11 @@ def test_stick_slip_cycles_with_partial_waves_first():
 
 
 def test_equal_runs_have_equal_successions(bench_case):
-    again = describe_behaviour(simulate(Slab(height=40.0), Coulomb(fs=1.0), LoadPath()))
+    again = describe_behaviour(simulate(Slab(height=40.0), Coulomb(fs=1.0), LoadPath(),
+                                        cache=CACHE))
     assert again.sequence == describe_behaviour(bench_case).sequence
-    other = describe_behaviour(simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath()))
+    other = describe_behaviour(simulate(Slab(height=40.0), Coulomb(fs=0.3), LoadPath(),
+                                        cache=CACHE))
     assert other.sequence != again.sequence
 
 
@@ -252,7 +257,7 @@ def test_a_zone_state_met_again_with_other_coefficients_solves_afresh(zones, com
     """Slip-weakening meets one zone state with many coefficients: the kept layout of
     the state must not carry one coefficient into the next solve."""
     slab = Slab(height=40.0)
-    condensed = condense(slab)
+    condensed = condense(slab, cache=CACHE)
     n = slab.initial_gap().size
     rng = np.random.default_rng(3)
     state = rng.choice(np.array([OPEN, STICK, SLIP], dtype=np.int8), size=n, p=zones)
@@ -283,7 +288,7 @@ def test_the_slips_sensitivity_to_the_coefficients_is_their_derivative(zones, co
     """Slip-weakening's Newton step stands on d(ds)/d(mu): it must be the derivative of
     the very solution, whichever form solves it and whatever is imposed on the flat."""
     slab = Slab(height=40.0, elements=20)
-    condensed = condense(slab)
+    condensed = condense(slab, cache=CACHE)
     body = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
     n = body.n
     rng = np.random.default_rng(5)
@@ -316,7 +321,7 @@ def test_a_state_met_again_is_solved_by_its_affine_map_as_afresh(zones, complian
     previous positions and other loads it must give what a fresh factorisation gives
     (on a crowned slab, whose initial gaps are the map's constant)."""
     slab = Slab(height=40.0, elements=20, profile=lambda x: 1e-4 * (x / 40.0) ** 2)
-    condensed = condense(slab)
+    condensed = condense(slab, cache=CACHE)
     n = slab.initial_gap().size
     rng = np.random.default_rng(11)
     state = rng.choice(np.array([OPEN, STICK, SLIP], dtype=np.int8), size=n, p=zones)

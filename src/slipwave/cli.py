@@ -404,10 +404,15 @@ def _simulate_test(args: argparse.Namespace) -> None:
         steps = replay.simulation.drop_vars(["ux", "uy", "ux_before_wave", "uy_before_wave"])
         write_dataset(steps, args.steps)
     if args.scatter is not None:
+        if "load_calibration" not in fit:
+            raise SlipwaveError(f"{args.fit}: no load_calibration: its neighbouring laws "
+                                "cannot be placed (fit the test again)")
+        # the neighbours lie a load cell's calibration apart: the fit's own
         scatter = sequence_scatter(setup, law, elements=int(fit["elements"]),
                                    sample_rate=args.sample_rate, min_drop=min_drop,
                                    gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"],
-                                   detection=detection, cache=cache)
+                                   step=float(fit["load_calibration"]), detection=detection,
+                                   cache=cache)
         with atomic_output(args.scatter) as temporary:
             scatter.to_csv(temporary, index=False, float_format="%.6g")
     print(f"{args.fit} -> {args.output}: {fit['chosen']} "

@@ -95,8 +95,9 @@ ORIGIN = Feature("first slip: where the first wave began (video)", "mm", 10.0)
 
 SCATTER_STEP = LOAD_CALIBRATION
 """How far apart the coefficients of :func:`slipwave.simulate.sequence_scatter`'s
-neighbouring simulations are (relative): the load cells' calibration, within which no
-measurement tells two coefficients apart."""
+neighbouring simulations are by default (relative): the load cells' calibration, within
+which no measurement tells two coefficients apart (the simulate stage takes the fit's,
+``fit.load_calibration``)."""
 
 
 def _median(events: pd.DataFrame, column: str) -> float:

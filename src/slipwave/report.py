@@ -285,7 +285,8 @@ def pairing_summary(
         :func:`render_test_page`: ``signals``, ``zooms``,
         ``ratios``, ``space_time``, ``frames``, ``map``), ``placement``, ``missing``
         (what could not be shown, in words) and ``scatter_step`` (how far apart the
-        coefficients of the comparison's neighbouring simulations are).
+        coefficients of the comparison's neighbouring simulations are: the fit's load
+        calibration).
 
     """
     missing: list[str] = []
@@ -314,6 +315,7 @@ def pairing_summary(
                                          "source": setup[key]["source"]})
         summary["chosen"] = fit["chosen"]
         summary["elements"] = fit.get("elements")
+        summary["scatter_step"] = fit.get("load_calibration", SCATTER_STEP)
         for law, entry in fit["laws"].items():
             summary["laws"].append({
                 "law": law, "chosen": law == fit["chosen"], "rejected": entry["rejected"],
