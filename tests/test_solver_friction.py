@@ -79,3 +79,10 @@ def test_the_virtual_bench_writes_a_slip_weakening_test():
     assert result.recording.sizes["time"] > 5000
     assert len(result.events) >= 5
     assert result.simulation.attrs["friction_law"] == "linear slip-weakening"
+
+
+def test_a_run_in_lasts_a_whole_number_of_gross_slips():
+    assert Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=4.0).static_after(2) == \
+        pytest.approx(1.05)
+    with pytest.raises(SlipwaveError, match=r"whole number of gross slips, not 4\.5"):
+        Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=4.5)

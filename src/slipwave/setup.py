@@ -4,7 +4,8 @@ The slab's geometry and material come from the recording's header (the card's
 metadata lines, ``length_mm``, ``height_mm``...) or from the campaign table's columns
 of the same names, the table winning; the normal load, the drive speed and the
 machine's stiffness are measured on the recording itself (:func:`normal_load_plateau`,
-:func:`drive_speed`, :func:`machine_stiffness`). Every value keeps where it came from.
+:func:`drive`). Every value keeps where it came from. The bench's virtual tests build on
+this module (:func:`slipwave.bench.setup_bench_test`); it imports nothing of them.
 What can be neither read nor measured is an error that names the test and the column
 to add to the campaign table.
 """
@@ -34,7 +35,6 @@ GEOMETRY = {
 EDGE_REFERENCES = ("frame", "flat")
 """What the edge sensors read against: the loading frame (elastic deflection only) or
 the flat (the slip accumulates in them)."""
-
 
 
 @dataclass(frozen=True)

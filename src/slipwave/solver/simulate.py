@@ -38,8 +38,8 @@ class Coulomb:
 
     ``fd`` defaults to ``fs``. An optional run-in makes the static coefficient
     grow linearly from ``fs`` to ``fs_final`` over the first ``runin_slips``
-    gross slips (an interface whose adhesion builds up as it is worn in); the
-    dynamic one stays.
+    gross slips, a whole number (an interface whose adhesion builds up as it is worn
+    in); the dynamic one stays.
     """
 
     fs: float
@@ -55,6 +55,9 @@ class Coulomb:
         if self.fs_final is not None and not (self.fs_final >= self.dynamic
                                               and self.runin_slips > 0):
             raise SlipwaveError("a run-in needs fs_final >= fd and runin_slips > 0")
+        if float(self.runin_slips) != int(self.runin_slips):
+            raise SlipwaveError(f"a run-in lasts a whole number of gross slips, not "
+                                f"{self.runin_slips}")
 
     def static_after(self, gross_slips: int) -> float:
         """The static coefficient after ``gross_slips`` gross slips.
