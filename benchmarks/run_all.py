@@ -2,9 +2,11 @@
 
 Each ``bench_*.py`` runs as its own process, one after the other; its output (the
 figures and each target's verdict) goes to the terminal and to the results file, with
-the machine's load before and after it, its wall time and its exit status. The file is
-written whole at the end (a run stopped half-way leaves the previous one), and the run
-fails when any benchmark missed a target.
+when and on which commit it ran, the machine's load before and after it, its wall time
+and its exit status. Naming some benchmarks runs those alone and replaces their
+sections, keeping the others'. The file is written whole at the end (a run stopped
+half-way leaves the previous one), and the run fails when any benchmark missed a
+target.
 
 Run: make bench  (or python benchmarks/run_all.py [bench_map.py ...])
 """
@@ -36,6 +38,7 @@ def _load() -> str:
 
 def run(bench: Path) -> tuple[str, bool]:
     """One benchmark's section of the results, and whether it met its targets."""
+    started = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     before = _load()
     began = time.perf_counter()
     process = subprocess.Popen([sys.executable, str(bench)], cwd=HERE.parent, text=True,
@@ -49,9 +52,25 @@ def run(bench: Path) -> tuple[str, bool]:
     seconds = time.perf_counter() - began
     verdict = "met its targets" if status == 0 else f"MISSED (exit status {status})"
     section = [f"## {bench.name}", "",
-               f"{verdict}; {seconds:.0f} s wall; load average (1, 5, 15 min) {before} "
-               f"before, {_load()} after.", "", "```", *lines, "```", ""]
+               f"{verdict}; run {started} on commit {_commit()}, {seconds:.0f} s wall; load "
+               f"average (1, 5, 15 min) {before} before, {_load()} after.", "", "```",
+               *lines, "```", ""]
     return "\n".join(section), status == 0
+
+
+def kept_sections() -> dict[str, str]:
+    """The sections of the results file as it stands, by benchmark file name."""
+    if not RESULTS.exists():
+        return {}
+    sections: dict[str, str] = {}
+    name = ""
+    for line in RESULTS.read_text().splitlines():
+        if line.startswith("## "):
+            name = line.removeprefix("## ").strip()
+            sections[name] = ""
+        if name:
+            sections[name] += line + "\n"
+    return sections
 
 
 def main() -> None:
@@ -60,20 +79,18 @@ def main() -> None:
     args = parser.parse_args()
     benches = ([HERE / name for name in args.benches] if args.benches
                else sorted(HERE.glob("bench_*.py")))
-    started = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     header = ["# Benchmark results", "",
               "Written by `make bench` (`benchmarks/run_all.py`); do not edit by hand.", "",
-              f"- run: {started}, commit {_commit()}",
-              f"- machine: {os.cpu_count()} cores, {platform.machine()}, Python "
-              f"{platform.python_version()}, {platform.platform()}", ""]
-    sections, met = [], True
+              f"Machine: {os.cpu_count()} cores, {platform.machine()}, Python "
+              f"{platform.python_version()}, {platform.platform()}.", ""]
+    sections, met = (kept_sections() if args.benches else {}), True
     for bench in benches:
         print(f"== {bench.name}", flush=True)
-        section, ok = run(bench)
-        sections.append(section)
+        sections[bench.name], ok = run(bench)
         met &= ok
     temporary = RESULTS.with_suffix(".md.part")
-    temporary.write_text("\n".join(header + sections))
+    ordered = [sections[name].rstrip("\n") + "\n" for name in sorted(sections)]
+    temporary.write_text("\n".join(header) + "\n" + "\n".join(ordered))
     temporary.replace(RESULTS)
     print(f"-> {RESULTS}")
     if not met:
