@@ -23,8 +23,7 @@ import xarray as xr
 from slipwave.compare import ORIGIN, SCATTER_STEP, event_features, first_wave
 from slipwave.defaults import BAND_MM, CONVENTIONS, SAMPLE_RATE_HZ
 from slipwave.errors import SlipwaveError
-from slipwave.events import DetectionSettings, detect_events
-from slipwave.events.detect import DEFAULT_DETECTION
+from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.fit import detected_edge_threshold, simulated_recording
 from slipwave.photoelastic import Camera, Photoelastic
 from slipwave.setup import TestSetup
