@@ -4,8 +4,11 @@
 #
 # One stage, one name: rule <stage> lives in workflow/rules/<stage>.smk, runs
 # `slipwave <stage>` and its code is the module the README's stage table names.
+import re
+
 from snakemake.utils import min_version, validate
 
+from slipwave.io.atomic import remove_stale_parts
 from slipwave.map import friction_grid, shard_count
 from slipwave.validation import load_schema, schema_path
 from slipwave.campaign import (
@@ -50,9 +53,19 @@ MAP_SHARD_FILES = [
 
 
 wildcard_constraints:
-    test_id="|".join(TEST_IDS) or "no-tests",
+    test_id="|".join(map(re.escape, TEST_IDS)) or "no-tests",
     height_ratio="|".join(MAP_HEIGHT_RATIOS).replace(".", r"\."),
     shard=r"\d+",
+
+
+# A job killed outright (out of memory, SIGKILL) leaves its half-written output's
+# hidden .part file: removed when the workflow starts and when a job fails.
+onstart:
+    remove_stale_parts(["results", "reports"])
+
+
+onerror:
+    remove_stale_parts(["results", "reports"])
 
 
 include: "workflow/rules/common.smk"

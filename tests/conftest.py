@@ -31,3 +31,15 @@ def write(tmp_path: Path) -> Callable[..., Path]:
         return path
 
     return _write
+
+
+# The files whose module fixtures take longest go first: `make test`'s two workers take
+# whole files in collection order, and the longest started last would end alone.
+LONGEST_FIRST = ("test_workflow.py", "test_events_colas.py", "test_events_accuracy.py",
+                 "test_video_waves.py")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Put the slowest files first (a stable sort: each file keeps its tests' order)."""
+    rank = {name: k for k, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))

@@ -63,7 +63,8 @@ def test_an_unexpected_exception_is_one_line_and_a_log(monkeypatch, tmp_path, ca
     import tempfile
 
     monkeypatch.setattr(tempfile, "tempdir", None)
-    assert main(["summary", "x.nc", "-o", "y.csv"]) == 2
+    (tmp_path / "x.nc").write_text("")
+    assert main(["summary", str(tmp_path / "x.nc"), "-o", str(tmp_path / "y.csv")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "internal error (ZeroDivisionError: a bug)" in err
     log = next(tmp_path.glob("slipwave-crash-*.log"))

@@ -155,10 +155,11 @@ def test_events_dataset_round_trip(hl050, tmp_path):
 
 def test_command_line_detect_summary_report(tmp_path, capsys):
     recording = tmp_path / "hl050.nc"
-    assert main(["ingest", str(BENCH / "hl050.csv"), "-o", str(recording)]) == 0
+    assert main(["ingest", str(BENCH / "hl050.csv"), "-o", str(recording),
+                 "--test-id", "hl050"]) == 0
     events_csv, events_nc = tmp_path / "events.csv", tmp_path / "events.nc"
     assert main(["detect", str(recording), "-o", str(events_csv), "--netcdf",
-                 str(events_nc), "--test-id", "hl050"]) == 0
+                 str(events_nc)]) == 0
     assert "32 events (23 partial_slip, 9 gross_slip)" in capsys.readouterr().out
     table = pd.read_csv(events_csv)
     assert list(table.columns) == list(EVENT_COLUMNS) and len(table) == 32
@@ -178,7 +179,8 @@ def test_command_line_detect_summary_report(tmp_path, capsys):
 def test_command_line_detect_on_a_bad_file_fails_cleanly(tmp_path, capsys):
     bad = tmp_path / "nothing.nc"
     write_dataset(xr.Dataset({"T": ("time", [np.nan] * 10), "N": ("time", [-1.0] * 10)},
-                             coords={"time": np.arange(10.0)}, attrs={"source": "x.csv"}), bad)
+                             coords={"time": np.arange(10.0)},
+                             attrs={"source": "x.csv", "product": "recording"}), bad)
     assert main(["detect", str(bad), "-o", str(tmp_path / "e.csv")]) == 1
     assert "x.csv: channel T is missing or has no finite value" in capsys.readouterr().err
     assert not (tmp_path / "e.csv").exists()

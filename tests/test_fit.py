@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fuzzing import valid_fit
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
@@ -323,6 +324,7 @@ def test_fits_table_reads_every_law(tmp_path):
     table = fits_table([fit])
     assert table.loc[0, "height_ratio"] == 0.25 and table.loc[0, "coulomb_delta_aic"] == 12.0
     assert {"fs", "fd_low", "run_in_fs_final_high"} <= set(table.columns)
-    (tmp_path / "f.json").write_text(json.dumps(fit))
+    # the command reads a whole fit.json (slipwave.fit.read_fit checks it)
+    (tmp_path / "f.json").write_text(json.dumps(valid_fit()))
     assert main(["fits", str(tmp_path / "f.json"), "-o", str(tmp_path / "fits.csv")]) == 0
-    assert pd.read_csv(tmp_path / "fits.csv")["law"].tolist() == ["run-in"]
+    assert pd.read_csv(tmp_path / "fits.csv")["law"].tolist() == ["coulomb"]

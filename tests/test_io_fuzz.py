@@ -1,4 +1,9 @@
-"""Random and mutated files: the reader returns a Dataset or raises SlipwaveError, nothing else."""
+"""Random and mutated files: each reader returns what it promises or raises SlipwaveError.
+
+The acquisition reader, the campaign table's reader and checks, and the fit.json reader,
+whose content the simulate, compare, fits and report stages then use: a fit it accepts
+must be one they can use.
+"""
 
 from __future__ import annotations
 
@@ -10,10 +15,21 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fuzzing import csv_like_text, mutated_csv, mutated_table, table_like_text
+from fuzzing import (
+    csv_like_text,
+    mutated_csv,
+    mutated_fit,
+    mutated_table,
+    table_like_text,
+    valid_fit,
+)
 from slipwave.campaign import check_campaign, read_campaign
 from slipwave.errors import SlipwaveError
+from slipwave.events import DetectionSettings
+from slipwave.fit import chosen_law, read_fit
+from slipwave.fits import fits_table
 from slipwave.io import read_acquisition
+from slipwave.setup import TestSetup
 
 TABLE_SCHEMA = json.loads(
     (Path(__file__).parents[1] / "src/slipwave/schemas/tests.schema.json").read_text())
@@ -71,3 +87,40 @@ def test_mutated_campaign_tables(content):
 @given(table_like_text)
 def test_random_campaign_tables(text):
     read_table_or_fail(text.encode("utf-8"))
+
+
+def read_fit_or_fail(content: bytes) -> None:
+    path = _folder / "fit.json"
+    path.write_bytes(content)
+    try:
+        fit = read_fit(path)
+    except SlipwaveError:
+        return
+    # what the reader accepts, the stages can use: law, setup, slab, detection, table
+    chosen_law(fit)
+    setup = TestSetup.from_dict(fit["setup"])
+    setup.slab(int(fit["elements"]))
+    setup.load_path()
+    DetectionSettings.from_dict(fit["detection"])
+    assert len(fits_table([fit])) == 1
+
+
+def test_the_valid_fit_is_read():
+    path = _folder / "valid.json"
+    path.write_text(json.dumps(valid_fit()))
+    assert read_fit(path)["chosen"] == "coulomb"
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(mutated_fit())
+def test_mutated_fit_json(content):
+    read_fit_or_fail(json.dumps(content).encode("utf-8"))
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.data())
+def test_damaged_fit_json_text(data):
+    text = json.dumps(valid_fit(), indent=2).encode("utf-8")
+    cut = data.draw(st.integers(0, len(text)))
+    noise = data.draw(st.binary(max_size=8))
+    read_fit_or_fail(text[:cut] + noise + text[cut + len(noise):])

@@ -127,7 +127,11 @@ def test_every_schema_setting_is_tried():
 
 
 @pytest.mark.parametrize("command", ["detect", "fit", "simulate", "compare"])
-def test_every_detecting_command_takes_the_detection_settings(command):
+def test_every_detecting_command_takes_the_detection_settings(command, tmp_path,
+                                                               monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the inputs the options name must exist
+    for name in ("r.nc", "e.nc", "s.nc", "fit.json"):
+        (tmp_path / name).write_text("")
     arguments = {"detect": ["detect", "r.nc", "-o", "e.csv"],
                  "fit": ["fit", "r.nc", "-o", "fit.json"],
                  "simulate": ["simulate", "--fit", "fit.json", "-o", "s.nc"],

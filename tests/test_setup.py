@@ -54,7 +54,7 @@ def test_what_cannot_be_read_or_measured_names_the_column_to_add(hl075):
         read_test_setup(hl075, {"test_id": "hl075", "edge_reference": "flat"})
     with pytest.raises(SlipwaveError, match="edge_reference to frame or flat"):
         read_test_setup(hl075, {"test_id": "hl075", **MATERIAL, "edge_reference": ""})
-    with pytest.raises(SlipwaveError, match="column width_mm is 'ten', not a positive number"):
+    with pytest.raises(SlipwaveError, match="column width_mm: 'ten' is not a number"):
         read_test_setup(hl075, {"test_id": "hl075", **MATERIAL, "width_mm": "ten"})
     without_dt = hl075.drop_vars("DT")
     with pytest.raises(SlipwaveError, match="speed_mm_s and machine_stiffness_n_mm"):

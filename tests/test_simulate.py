@@ -8,25 +8,14 @@ import json
 import pandas as pd
 import pytest
 
+from fuzzing import valid_fit
 from slipwave.cli import main
 from slipwave.io import read_dataset
 
-SETUP = {"test_id": "small", "edge_reference": "frame",
-         **{key: {"value": value, "source": "campaign table"} for key, value in {
-             "length_mm": 80.0, "height_mm": 40.0, "width_mm": 10.0,
-             "youngs_modulus_mpa": 7.0, "poisson_ratio": 0.48, "normal_load_n": 85.0,
-             "speed_mm_s": 0.1, "machine_stiffness_n_mm": 40.0, "duration_s": 60.0,
-             "loading_time_s": 5.0}.items()}}
-
 
 def fit_json(folder, **changes):
-    fit = {"test_id": "small", "setup": SETUP, "elements": 16, "load_calibration": 0.02,
-           "detection": {"threshold": 8.0, "max_spike": 2, "max_duration": None,
-                         "min_fall_rate": 1.2, "edge_convention": "auto"},
-           "measured": {"slips": 3, "gross_slips": 2, "min_drop_n": 0.3},
-           "chosen": "coulomb", "parameters": {"fs": 0.8, "fd": 0.6}, **changes}
     path = folder / "fit.json"
-    path.write_text(json.dumps(fit))
+    path.write_text(json.dumps(valid_fit(**changes)))
     return path
 
 

@@ -104,7 +104,7 @@ def test_full_run_on_default_campaign(workdir):
         clock = json.loads((workdir / f"results/{test_id}/clock.json").read_text())
         assert clock["pairs"] >= 30
     campaign = (workdir / "reports/campaign.html").read_text()
-    assert all(f'href="{test_id}.html"' in campaign for test_id in ids)
+    assert all(f'href="./{test_id}.html"' in campaign for test_id in ids)
     assert (workdir / "reports/campaign.pdf").read_bytes().startswith(b"%PDF")
     fits = pd.read_csv(workdir / "results/fits.csv")
     assert list(fits["test_id"]) == ids and (workdir / "results/fits.png").stat().st_size > 1000

@@ -22,7 +22,9 @@ from slipwave.solver.slab import Condensed
 class DiskCache:
     """Condensed matrices as ``condensed-<key>.npz`` files in ``folder``.
 
-    A damaged file is rebuilt; a folder that cannot be written only costs time.
+    Each file keeps its key beside the matrices: a damaged file, or one of another
+    geometry under the key's name, is rebuilt; a folder that cannot be written only
+    costs time.
     Hand it to :class:`slipwave.solver.SolverCache` as its ``store``.
 
     Attributes
@@ -47,7 +49,8 @@ class DiskCache:
         Returns
         -------
         Condensed or None
-            The stored matrices, or ``None`` when missing or unreadable.
+            The stored matrices, or ``None`` when missing, unreadable, stored under
+            another key or not of one shape.
 
         """
         path = self._path(key)
@@ -55,9 +58,16 @@ class DiskCache:
             return None
         try:
             with np.load(path) as stored:
-                return Condensed(stored["stiffness"], stored["sensors"], stored.get("compliance"))
+                if str(stored["key"]) != key:
+                    return None  # another geometry's file under this name
+                condensed = Condensed(stored["stiffness"], stored["sensors"],
+                                      stored.get("compliance"))
         except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
             return None  # a damaged cache file is rebuilt
+        size = condensed.stiffness.shape[0]
+        shapes = [condensed.stiffness.shape == (size, size), condensed.sensors.shape == (2, size),
+                  condensed.compliance is None or condensed.compliance.shape == (size, size)]
+        return condensed if all(shapes) else None
 
     def save(self, key: str, condensed: Condensed) -> None:
         """Store ``condensed`` under ``key``, whole or not at all.
@@ -73,9 +83,10 @@ class DiskCache:
         try:
             with atomic_output(self._path(key)) as temporary, open(temporary, "wb") as handle:
                 if condensed.compliance is None:
-                    np.savez(handle, stiffness=condensed.stiffness, sensors=condensed.sensors)
+                    np.savez(handle, key=np.array(key), stiffness=condensed.stiffness,
+                             sensors=condensed.sensors)
                 else:
-                    np.savez(handle, stiffness=condensed.stiffness, sensors=condensed.sensors,
-                             compliance=condensed.compliance)
+                    np.savez(handle, key=np.array(key), stiffness=condensed.stiffness,
+                             sensors=condensed.sensors, compliance=condensed.compliance)
         except OSError:
             pass  # a read-only cache only costs time

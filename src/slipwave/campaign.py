@@ -11,7 +11,7 @@ from typing import Any
 import pandas as pd
 
 from slipwave.errors import ConfigError
-from slipwave.validation import check, read_yaml
+from slipwave.validation import check, read_yaml, setup_value_problem
 
 SETUP_COLUMNS = ("length_mm", "height_mm", "width_mm", "youngs_modulus_mpa", "poisson_ratio",
                  "normal_load_n", "speed_mm_s", "machine_stiffness_n_mm", "edge_reference")
@@ -20,6 +20,19 @@ SETUP_COLUMNS = ("length_mm", "height_mm", "width_mm", "youngs_modulus_mpa", "po
 OPTIONAL_COLUMNS = ("frames", "columns", "fps", "edge_convention", "height_ratio",
                     *SETUP_COLUMNS)
 """Columns a campaign table may leave out (their cells are then empty)."""
+
+
+RESERVED_TEST_IDS = {
+    "campaign": "reports/campaign.html",
+    "summary.csv": "results/summary.csv",
+    "fits.csv": "results/fits.csv",
+    "fits.png": "results/fits.png",
+    "map": "results/map/",
+    "logs": "results/logs/",
+    "cache": "results/cache/",
+}
+"""Names of the campaign's own products beside the tests' (a test's files are
+``results/<test_id>/`` and ``reports/<test_id>.html``): no test may take one."""
 
 
 def read_campaign(path: str | PathLike[str]) -> pd.DataFrame:
@@ -258,11 +271,24 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
     """
     source = campaign.attrs.get("source", "the campaign table")
     lines = campaign.attrs.get("lines", {})
+    folded: dict[str, str] = {}
     for test_id, test in campaign.iterrows():
         where = f"{source}, line {lines[test_id]}" if test_id in lines else source
         where += f" (test {test_id!r})"
         if schema is not None:
             check(dict(test), dict(schema), source=where)
+        if str(test_id).lower() in RESERVED_TEST_IDS:
+            raise ConfigError(f"{where}: test_id {test_id!r} is the name of a campaign product "
+                              f"({RESERVED_TEST_IDS[str(test_id).lower()]}): rename the test")
+        other = folded.setdefault(str(test_id).lower(), str(test_id))
+        if other != test_id:
+            raise ConfigError(f"{where}: test_id {test_id!r} differs from {other!r} only by "
+                              "case: their files would be one on a case-insensitive disk")
+        for key in SETUP_COLUMNS:
+            cell = str(test.get(key, "") or "")
+            problem = setup_value_problem(key, cell) if cell and key != "edge_reference" else None
+            if problem is not None:
+                raise ConfigError(f"{where}: {key}: {problem}")
         try:
             column_map(config, test["columns"])
         except ConfigError as err:

@@ -17,7 +17,7 @@ import argparse
 import os
 import signal
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -45,6 +45,68 @@ def _positive_float(text: str) -> float:
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be positive, got {text}")
     return value
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from err
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    value = _non_negative_int(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError("must be 1 or more, got 0")
+    return value
+
+
+def _input(text: str) -> Path:
+    """An input file or folder that exists (said before anything runs)."""
+    path = Path(text)
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"no such file or folder: {text!r}")
+    return path
+
+
+def _setting(section: str, key: str) -> Callable[[str], float | int]:
+    """An option's type checked against the config schema's ``section.key``.
+
+    The same bounds on the command line as in a campaign's config.
+    """
+    import jsonschema
+
+    schema = default.setting_schema(section, key)
+    schema.pop("default", None)
+    integer = schema.get("type") == "integer"
+
+    def convert(text: str) -> float | int:
+        try:
+            value: float | int = int(text) if integer else float(text)
+        except ValueError as err:
+            kind = "a whole number" if integer else "a number"
+            raise argparse.ArgumentTypeError(f"expected {kind}, got {text!r}") from err
+        try:
+            jsonschema.validate(value, schema)
+        except jsonschema.ValidationError as err:
+            raise argparse.ArgumentTypeError(f"{err.message} (the config's {section}.{key} "
+                                             "takes the same values)") from err
+        return value
+
+    convert.__name__ = f"{section}.{key}"  # argparse names the type in its messages
+    return convert
+
+
+def _band(values: Sequence[float], option: str = "--band") -> tuple[float, float]:
+    """A band above the interface, mm: two numbers, 0 <= low < high."""
+    low, high = values
+    if not 0 <= low < high:
+        raise SlipwaveError(f"{option} {low:g} {high:g}: a band above the interface needs "
+                            "0 <= LOW < HIGH, mm")
+    return low, high
 
 
 def _optional_float(text: str) -> float | None:
@@ -79,9 +141,16 @@ def _print_warnings(source: object, attrs: Mapping[Any, Any]) -> None:
 
 
 def _ingest(args: argparse.Namespace) -> None:
+    from slipwave.identity import test_id_problem
     from slipwave.io import read_acquisition, write_dataset
 
     recording = read_acquisition(args.raw, columns=dict(args.columns) or None)
+    if args.test_id is not None:
+        recording.attrs["test_id"] = args.test_id
+    problem = test_id_problem(recording.attrs["test_id"])
+    if problem is not None:
+        where = "--test-id" if args.test_id is not None else f"{args.raw}: header line test_id"
+        raise SlipwaveError(f"{where}: {problem}; name the test with --test-id")
     write_dataset(recording, args.output)
     _print_warnings(args.raw, recording.attrs)
     print(f"{args.raw} -> {args.output}: {recording.sizes['time']} samples")
@@ -89,12 +158,14 @@ def _ingest(args: argparse.Namespace) -> None:
 
 def _detect(args: argparse.Namespace) -> None:
     from slipwave.events import detect_events, events_dataset, segment_phases, wave_counts
+    from slipwave.identity import check_same_test, stamp
     from slipwave.io import atomic_output, read_dataset, write_dataset
 
-    recording = read_dataset(args.recording)
+    recording = read_dataset(args.recording, "recording")
     ratio = args.gross_edge_ratio
     if args.simulated is not None:
-        simulated = read_dataset(args.simulated)
+        simulated = read_dataset(args.simulated, "simulated recording")
+        check_same_test([(args.recording, recording.attrs), (args.simulated, simulated.attrs)])
         if "gross_edge_ratio" not in simulated.attrs:
             raise SlipwaveError(f"{args.simulated}: no gross_edge_ratio: not a recording of "
                                 "'slipwave simulate --fit'")
@@ -103,7 +174,7 @@ def _detect(args: argparse.Namespace) -> None:
     events = detect_events(recording, **_detection_settings(args).keywords(
         min_drop=args.min_drop, min_jump=args.min_jump, gross_edge_ratio=ratio))
     dataset = events_dataset(events, segment_phases(recording, events))
-    dataset.attrs["test_id"] = args.test_id or str(recording.attrs.get("test_id", ""))
+    stamp(dataset.attrs, "events", recording.attrs)
     dataset.attrs["source"] = str(args.recording)
     if args.netcdf is not None:
         write_dataset(dataset, args.netcdf)
@@ -125,19 +196,24 @@ def _fit(args: argparse.Namespace) -> None:
     import json
 
     from slipwave.fit import fit_test, measured_events
+    from slipwave.identity import stamp
     from slipwave.io import atomic_output, read_dataset
+    from slipwave.resources import require_memory
     from slipwave.setup import read_test_setup
 
-    recording = read_dataset(args.recording)
-    cells = {"test_id": args.test_id or str(recording.attrs.get("test_id", "")),
-             **dict(args.setting)}
-    setup = read_test_setup(recording, cells)
+    recording = read_dataset(args.recording, "recording")
+    cells = {**dict(args.setting), "test_id": str(recording.attrs["test_id"])}
     detection = _detection_settings(args)
     events = measured_events(recording, detection=detection)
+    setup = read_test_setup(recording, cells)
+    require_memory(setup.simulation_memory(args.elements, float(events.attrs["sample_rate"])),
+                   f"fitting test {setup.test_id!r} with {args.elements} elements",
+                   limit_gb=args.memory_limit)
     fit = fit_test(setup, events, laws=args.laws, elements=args.elements,
                    max_evaluations=args.max_evaluations,
                    calibration_error=args.load_calibration, detection=detection,
                    cache=_solver_cache(args))
+    stamp(fit, None, recording.attrs)
     seconds = {law: entry.pop("seconds") for law, entry in fit["laws"].items()}
     with atomic_output(args.output) as temporary:  # (wall times to the log only)
         temporary.write_text(json.dumps(fit, indent=2), encoding="utf-8")
@@ -153,34 +229,37 @@ def _fit(args: argparse.Namespace) -> None:
 def _compare(args: argparse.Namespace) -> None:
     import json
 
-    import pandas as pd
-    import xarray as xr
-
     from slipwave.compare import compare_test, place_on_map, verdict_counts
     from slipwave.events import events_table
     from slipwave.fit import read_fit
-    from slipwave.io import atomic_output, read_dataset
+    from slipwave.identity import check_same_test
+    from slipwave.io import atomic_output, read_dataset, read_table
 
-    events_ds = read_dataset(args.events)
+    events_ds = read_dataset(args.events, "events")
     measured = events_table(events_ds)
     fit = read_fit(args.fit)
+    simulated = read_dataset(args.simulated, "simulated recording")
+    steps = read_dataset(args.steps, "solver steps") if args.steps else None
+    check_same_test([(args.events, events_ds.attrs), (args.fit, fit),
+                     (args.simulated, simulated.attrs)]
+                    + ([] if steps is None else [(args.steps, steps.attrs)]))
     detection = _detection_settings(args)
     _check_detection(fit, detection, args.fit)
-    waves = pd.read_csv(args.waves) if args.waves is not None else None
-    table = compare_test(measured, read_dataset(args.simulated),
-                         read_dataset(args.steps) if args.steps else None, waves,
+    waves = read_table(args.waves) if args.waves is not None else None
+    table = compare_test(measured, simulated, steps, waves,
                          min_drop=float(events_ds.attrs.get("min_drop", float("nan")))
                          if "min_drop" in events_ds.attrs else None,
-                         scatter=pd.read_csv(args.scatter) if args.scatter else None,
+                         scatter=read_table(args.scatter) if args.scatter else None,
                          detection=detection)
-    summary: dict[str, Any] = {"test_id": fit["test_id"], "law": fit["chosen"],
-                               "parameters": fit["parameters"],
+    summary: dict[str, Any] = {"test_id": fit["test_id"],
+                               "recording_sha256": fit["recording_sha256"],
+                               "law": fit["chosen"], "parameters": fit["parameters"],
                                "verdicts": verdict_counts(table)}
     if args.map is not None:
         setup = fit["setup"]
         ratio = setup["height_mm"]["value"] / setup["length_mm"]["value"]
-        with xr.open_dataset(args.map) as behaviour_map:
-            summary["map"] = place_on_map(behaviour_map.load(), ratio, fit["parameters"]["fs"])
+        behaviour_map = read_dataset(args.map, "behaviour map")
+        summary["map"] = place_on_map(behaviour_map, ratio, fit["parameters"]["fs"])
     with atomic_output(args.output) as temporary:
         table.to_csv(temporary, index=False, float_format="%.6g")
     if args.json is not None:
@@ -198,7 +277,7 @@ def _fits(args: argparse.Namespace) -> None:
     from slipwave.fits import fits_table
     from slipwave.io import atomic_output
 
-    table = fits_table([read_fit(str(path)) for path in args.fits])
+    table = fits_table([read_fit(path) for path in args.fits])
     with atomic_output(args.output) as temporary:
         table.to_csv(temporary, index=False, float_format="%.6g")
     if args.plot is not None:
@@ -215,10 +294,12 @@ def _summary(args: argparse.Namespace) -> None:
     from slipwave.events import summary_row
     from slipwave.io import atomic_output, read_dataset
 
-    rows = []
+    rows: list[dict[str, object]] = []
     for path in args.events:
-        dataset = read_dataset(path)
-        test_id = str(dataset.attrs.get("test_id") or Path(path).parent.name)
+        dataset = read_dataset(path, "events")
+        test_id = str(dataset.attrs["test_id"])
+        if any(row["test_id"] == test_id for row in rows):
+            raise SlipwaveError(f"{path}: test {test_id!r} again: each test's events once")
         rows.append(summary_row(test_id, dataset))
     with atomic_output(args.output) as temporary:
         pd.DataFrame(rows).to_csv(temporary, index=False, float_format="%.6g")
@@ -235,7 +316,7 @@ def _kymograph(args: argparse.Namespace) -> None:
         geometry = Geometry(int(row), left, right, args.length)
     else:
         geometry = find_geometry(source, args.length)
-    kymo = kymograph(source, geometry, band_mm=tuple(args.band))
+    kymo = kymograph(source, geometry, band_mm=_band(args.band))
     kymo.attrs["source"] = str(args.frames)
     kymo.attrs["warnings"] = "\n".join(source.warnings)
     write_dataset(kymo, args.output)
@@ -246,13 +327,17 @@ def _kymograph(args: argparse.Namespace) -> None:
 
 def _waves(args: argparse.Namespace) -> None:
     from slipwave.events import events_table
+    from slipwave.identity import check_same_test
     from slipwave.io import atomic_output, read_dataset
     from slipwave.video import align_clocks, fuse, on_card_clock, track_waves
 
-    kymo = read_dataset(args.kymograph)
-    events = events_table(read_dataset(args.events))
+    kymo = read_dataset(args.kymograph, "kymograph")
+    recording = read_dataset(args.recording, "recording")
+    events_ds = read_dataset(args.events, "events")
+    check_same_test([(args.recording, recording.attrs), (args.events, events_ds.attrs)])
+    events = events_table(events_ds)
     waves = track_waves(kymo)
-    clock = align_clocks(waves, kymo, read_dataset(args.recording), events)
+    clock = align_clocks(waves, kymo, recording, events)
     waves = on_card_clock(waves, clock)
     with atomic_output(args.output) as temporary:
         waves.to_csv(temporary, index=False, float_format="%.6g")
@@ -266,74 +351,98 @@ def _waves(args: argparse.Namespace) -> None:
 
 
 def _report(args: argparse.Namespace) -> None:
-    import json
-
-    import pandas as pd
-
-    from slipwave.io import read_dataset
+    from slipwave.compare import read_comparison
+    from slipwave.fit import read_fit
+    from slipwave.identity import check_same_test
+    from slipwave.io import read_dataset, read_table
     from slipwave.report import pairing_summary, video_summary, write_test_page
-    from slipwave.video import ClockFit
+    from slipwave.video import read_clock
 
-    events = None if args.events is None else read_dataset(args.events)
-    recording = read_dataset(args.recording)
+    recording = read_dataset(args.recording, "recording")
+    events = None if args.events is None else read_dataset(args.events, "events")
+    fit = None if args.fit is None else read_fit(args.fit)
+    simulated = (None if args.simulated is None
+                 else read_dataset(args.simulated, "simulated recording"))
+    contact = None if args.contact is None else read_dataset(args.contact, "contact history")
+    compared = {} if args.comparison_json is None else read_comparison(args.comparison_json)
+    check_same_test([(args.recording, recording.attrs)] + [
+        (path, content) for path, content in [
+            (args.events, None if events is None else events.attrs), (args.fit, fit),
+            (args.simulated, None if simulated is None else simulated.attrs),
+            (args.contact, None if contact is None else contact.attrs),
+            (args.comparison_json, compared or None)] if content is not None])
     video = None
     kymo = clock = None
     if args.kymograph is not None:
         if args.waves is None or args.clock is None:
             raise SlipwaveError("--kymograph needs --waves and --clock")
-        fused = None if args.fused is None else pd.read_csv(args.fused)
-        kymo = read_dataset(args.kymograph)
-        clock = ClockFit.from_json(args.clock.read_text())
-        video = video_summary(kymo, pd.read_csv(args.waves), clock, args.frames, events, fused)
+        fused = None if args.fused is None else read_table(args.fused)
+        kymo = read_dataset(args.kymograph, "kymograph")
+        clock = read_clock(args.clock)
+        video = video_summary(kymo, read_table(args.waves), clock, args.frames, events, fused)
     pairing = None
-    if args.fit is not None or args.simulated is not None:
-        from slipwave.fit import read_fit
-
-        compared = (json.loads(args.comparison_json.read_text())
-                    if args.comparison_json is not None else {})
-        behaviour_map = None
-        if args.map is not None:
-            import xarray as xr
-
-            with xr.open_dataset(args.map) as opened:
-                behaviour_map = opened.load()
+    if fit is not None or simulated is not None:
+        behaviour_map = None if args.map is None else read_dataset(args.map, "behaviour map")
         pairing = pairing_summary(
-            recording, events,
-            fit=None if args.fit is None else read_fit(str(args.fit)),
-            comparison=None if args.comparison is None else pd.read_csv(args.comparison),
-            simulated=None if args.simulated is None else read_dataset(args.simulated),
+            recording, events, fit=fit,
+            comparison=None if args.comparison is None else read_table(args.comparison),
+            simulated=simulated,
             simulated_events=(None if args.simulated_events is None
-                              else pd.read_csv(args.simulated_events)),
-            contact=None if args.contact is None else read_dataset(args.contact),
-            placement=compared.get("map"), behaviour_map=behaviour_map, kymo=kymo, clock=clock)
+                              else read_table(args.simulated_events)),
+            contact=contact, placement=compared.get("map"), behaviour_map=behaviour_map,
+            kymo=kymo, clock=clock)
     write_test_page(recording, args.output, events, video, pairing, pdf=args.pdf,
                     workers=args.threads)
     print(f"{args.recording} -> {args.output}" + (f", {args.pdf}" if args.pdf else ""))
 
 
 def _campaign_report(args: argparse.Namespace) -> None:
-    import json
-
-    import pandas as pd
-
     from slipwave.campaign_report import campaign_summary, write_campaign_report
+    from slipwave.compare import read_comparison
+    from slipwave.identity import test_id_problem
+    from slipwave.io import read_dataset, read_table
 
     comparisons = {}
     for path in args.comparisons:
-        content = json.loads(Path(path).read_text())
+        content = read_comparison(path)
         comparisons[str(content["test_id"])] = content
-    behaviour_map = None
-    if args.map is not None:
-        import xarray as xr
-
-        with xr.open_dataset(args.map) as opened:
-            behaviour_map = opened.load()
-    content = campaign_summary(pd.read_csv(args.summary),
-                               None if args.fits is None else pd.read_csv(args.fits),
+    behaviour_map = None if args.map is None else read_dataset(args.map, "behaviour map")
+    summary = read_table(args.summary, ["test_id"])
+    for line, test_id in enumerate(summary["test_id"].astype(str), start=2):
+        problem = test_id_problem(test_id)
+        if problem is not None:  # ids name the pages the report links to
+            raise SlipwaveError(f"{args.summary}, line {line}: {problem}")
+    content = campaign_summary(summary,
+                               None if args.fits is None else read_table(args.fits, ["test_id"]),
                                comparisons, behaviour_map)
     write_campaign_report(content, args.output, pdf=args.pdf, title=args.title)
     print(f"{len(content['tests'])} tests -> {args.output}" + (f", {args.pdf}" if args.pdf
                                                                else ""))
+
+
+def _check_config(args: argparse.Namespace) -> None:
+    from slipwave.campaign import check_campaign, check_config_files, read_campaign
+    from slipwave.validation import load_schema, read_yaml
+
+    # the workflow's own checks, run before Snakemake reads the files: Snakemake's
+    # reader names no line when a file is not YAML
+    check_config_files([args.workflow_config, *args.configs], load_schema("config"),
+                       command_line=args.configs)
+    def merge(into: dict[str, Any], update: Mapping[str, Any]) -> None:  # as Snakemake does
+        for key, value in update.items():
+            if isinstance(value, Mapping) and isinstance(into.get(key), dict):
+                merge(into[key], value)
+            else:
+                into[key] = value
+
+    config: dict[str, Any] = {}
+    for path in [args.workflow_config, *args.configs]:
+        content, _ = read_yaml(path)
+        merge(config, content or {})
+    campaign = read_campaign(config["tests"])
+    check_campaign(config, campaign, load_schema("tests"))
+    print(f"{', '.join(map(str, args.configs)) or args.workflow_config}: valid; "
+          f"{len(campaign)} tests in {config['tests']}")
 
 
 def _simulate(args: argparse.Namespace) -> None:
@@ -382,31 +491,36 @@ def _check_detection(fit: Mapping[str, Any], detection: DetectionSettings,
 
 def _simulate_test(args: argparse.Namespace) -> None:
     from slipwave.fit import chosen_law, read_fit
+    from slipwave.identity import stamp
     from slipwave.io import atomic_output, write_dataset
+    from slipwave.resources import require_memory
     from slipwave.setup import TestSetup
     from slipwave.simulate import replay_test, sequence_scatter
 
-    fit = read_fit(str(args.fit))
+    fit = read_fit(args.fit)
     detection = _detection_settings(args)
     _check_detection(fit, detection, args.fit)
     setup = TestSetup.from_dict(fit["setup"])
     law, min_drop = chosen_law(fit), float(fit["measured"]["min_drop_n"])
+    require_memory(setup.simulation_memory(int(fit["elements"]), args.sample_rate),
+                   f"simulating test {setup.test_id!r} with {fit['elements']} elements at "
+                   f"{args.sample_rate:g} Hz", limit_gb=args.memory_limit)
     cache = _solver_cache(args)
     replay = replay_test(setup, law, elements=int(fit["elements"]),
                          sample_rate=args.sample_rate, min_drop=min_drop,
-                         kymograph=args.contact is not None, band_mm=tuple(args.band),
+                         kymograph=args.contact is not None, band_mm=_band(args.band),
                          detection=detection, cache=cache)
+    stamp(replay.recording.attrs, "simulated recording", fit)
     write_dataset(replay.recording, args.output)
     if args.contact is not None:
+        stamp(replay.contact.attrs, "contact history", fit)
         write_dataset(replay.contact, args.contact)
     if args.steps is not None:
         # the nodal displacements are the bulk of it, and the contact history has them
         steps = replay.simulation.drop_vars(["ux", "uy", "ux_before_wave", "uy_before_wave"])
+        stamp(steps.attrs, "solver steps", fit)
         write_dataset(steps, args.steps)
     if args.scatter is not None:
-        if "load_calibration" not in fit:
-            raise SlipwaveError(f"{args.fit}: no load_calibration: its neighbouring laws "
-                                "cannot be placed (fit the test again)")
         # the neighbours lie a load cell's calibration apart: the fit's own
         scatter = sequence_scatter(setup, law, elements=int(fit["elements"]),
                                    sample_rate=args.sample_rate, min_drop=min_drop,
@@ -455,7 +569,7 @@ def _map_assemble(args: argparse.Namespace) -> None:
     from slipwave.io import atomic_output, read_dataset, write_dataset
     from slipwave.map import assemble_map, behaviour_legend, map_table
 
-    whole = assemble_map([read_dataset(path) for path in args.rows])
+    whole = assemble_map([read_dataset(path, "map row") for path in args.rows])
     write_dataset(whole, args.output)
     with atomic_output(args.csv) as temporary:
         map_table(whole).to_csv(temporary, index=False, float_format="%.6g")
@@ -468,13 +582,11 @@ def _map_assemble(args: argparse.Namespace) -> None:
 
 
 def _map_figures(args: argparse.Namespace) -> None:
-    import pandas as pd
-
-    from slipwave.io import atomic_output, read_dataset
+    from slipwave.io import atomic_output, read_dataset, read_table
     from slipwave.map import place_tests, representative_cases, simulate_case
     from slipwave.plot import plot_map, plot_zone_histories
 
-    whole = read_dataset(args.map)
+    whole = read_dataset(args.map, "behaviour map")
     tests = None
     if args.summary is not None:
         ratios: dict[str, float | str] = {}
@@ -483,7 +595,7 @@ def _map_figures(args: argparse.Namespace) -> None:
                 ratios[test_id] = float(text)
             except ValueError as err:
                 raise SlipwaveError(f"--test-ratio {test_id}={text}: H/L must be a number") from err
-        tests = place_tests(pd.read_csv(args.summary), ratios)
+        tests = place_tests(read_table(args.summary, ["test_id"]), ratios)
     with atomic_output(args.figure) as temporary:
         plot_map(whole, tests).savefig(temporary, dpi=130, format="png")
     if args.zones is not None:
@@ -520,13 +632,16 @@ def _detection_options() -> argparse.ArgumentParser:
     """The detection's settings, shared by every command that detects slips."""
     options = argparse.ArgumentParser(add_help=False)
     group = options.add_argument_group("detection (the campaign's 'detection' section)")
-    group.add_argument("--threshold", type=_positive_float, default=default.THRESHOLD,
+    group.add_argument("--threshold", type=_setting("detection", "threshold"),
+                       default=default.THRESHOLD,
                        help="default thresholds in noise standard deviations (%(default)s)")
-    group.add_argument("--max-spike", type=int, default=default.MAX_SPIKE,
+    group.add_argument("--max-spike", type=_setting("detection", "max_spike"),
+                       default=default.MAX_SPIKE,
                        help="longest spike ignored, samples (%(default)s)")
     group.add_argument("--max-duration", type=_optional_float, default=default.MAX_DURATION_S,
                        help="longest drop looked for, s ('none': a tenth of the recording)")
-    group.add_argument("--min-fall-rate", type=_positive_float, default=default.MIN_FALL_RATE,
+    group.add_argument("--min-fall-rate", type=_setting("detection", "min_fall_rate"),
+                       default=default.MIN_FALL_RATE,
                        help="how many times faster than the drive loads T a drop must fall "
                        "(%(default)s)")
     group.add_argument("--edge-convention", choices=["auto", "x_axis", "outward"],
@@ -543,6 +658,15 @@ def _cache_options() -> argparse.ArgumentParser:
                          default=os.environ.get("SLIPWAVE_CACHE_DIR") or None,
                          help="folder where the slabs' condensed matrices are kept across "
                          "runs (default: $SLIPWAVE_CACHE_DIR; unset: none kept)")
+    return options
+
+
+def _memory_options() -> argparse.ArgumentParser:
+    """The cap on what a command may plan to use, checked before it starts."""
+    options = argparse.ArgumentParser(add_help=False)
+    options.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
+                         help="refuse a run whose estimated memory exceeds this (default: "
+                         "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     return options
 
 
@@ -574,7 +698,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"slipwave {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    detection, cache = _detection_options(), _cache_options()
+    detection, cache, memory = _detection_options(), _cache_options(), _memory_options()
 
     ingest = commands.add_parser(
         "ingest", help="read an acquisition CSV, write it as CF netCDF",
@@ -583,6 +707,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ingest.add_argument("raw", type=Path, help="acquisition CSV (opened read-only)")
     ingest.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
+    ingest.add_argument("--test-id", default=None, help="the test's id, which every product "
+                        "made from the recording carries (default: the header's test_id, "
+                        "else the file's name)")
     ingest.add_argument(
         "--columns", type=_column_pair, nargs="*", default=[], metavar="NAME=CHANNEL",
         help="map header names (without their unit) to time, index, T, N, DG, DD, DT or "
@@ -591,51 +718,63 @@ def build_parser() -> argparse.ArgumentParser:
     ingest.set_defaults(run=_ingest)
 
     report = commands.add_parser("report", help="write the HTML page of one test")
-    report.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
+    report.add_argument("recording", type=_input, help="recording netCDF from 'slipwave ingest'")
     report.add_argument("-o", "--output", type=Path, required=True, help="HTML page to write")
-    report.add_argument("--events", type=Path, default=None,
+    report.add_argument("--events", type=_input, default=None,
                         help="events netCDF from 'slipwave detect --netcdf' (phases, slips)")
-    report.add_argument("--kymograph", type=Path, default=None,
+    report.add_argument("--kymograph", type=_input, default=None,
                         help="kymograph netCDF from 'slipwave kymograph'")
-    report.add_argument("--waves", type=Path, default=None, help="waves CSV of 'slipwave waves'")
-    report.add_argument("--clock", type=Path, default=None, help="clock JSON of 'slipwave waves'")
-    report.add_argument("--fused", type=Path, default=None,
+    report.add_argument("--waves", type=_input, default=None, help="waves CSV of 'slipwave waves'")
+    report.add_argument("--clock", type=_input, default=None, help="clock JSON of 'slipwave waves'")
+    report.add_argument("--fused", type=_input, default=None,
                         help="events with their waves, CSV of 'slipwave waves --fused'")
-    report.add_argument("--frames", type=Path, default=None,
+    report.add_argument("--frames", type=_input, default=None,
                         help="the video (or image folder) for frames around the first gross slip")
-    report.add_argument("--fit", type=Path, default=None, help="fit.json of 'slipwave fit'")
-    report.add_argument("--comparison", type=Path, default=None,
+    report.add_argument("--fit", type=_input, default=None, help="fit.json of 'slipwave fit'")
+    report.add_argument("--comparison", type=_input, default=None,
                         help="comparison CSV of 'slipwave compare'")
-    report.add_argument("--comparison-json", type=Path, default=None,
+    report.add_argument("--comparison-json", type=_input, default=None,
                         help="comparison JSON of 'slipwave compare --json' (place on the map)")
-    report.add_argument("--simulated", type=Path, default=None,
+    report.add_argument("--simulated", type=_input, default=None,
                         help="simulated recording of 'slipwave simulate --fit'")
-    report.add_argument("--simulated-events", type=Path, default=None,
+    report.add_argument("--simulated-events", type=_input, default=None,
                         help="simulated events CSV of 'slipwave compare'")
-    report.add_argument("--contact", type=Path, default=None,
+    report.add_argument("--contact", type=_input, default=None,
                         help="simulated contact history of 'slipwave simulate --contact'")
-    report.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
+    report.add_argument("--map", type=_input, default=None, help="behaviour map netCDF")
     report.add_argument("--pdf", type=Path, default=None, help="also print the page to PDF")
-    report.add_argument("--threads", type=int, default=1,
+    report.add_argument("--threads", type=_positive_int, default=1,
                         help="processes to draw the figures on (default 1)")
     report.set_defaults(run=_report)
 
     campaign_report = commands.add_parser(
         "campaign-report", help="write the campaign report (HTML, PDF) over every test")
-    campaign_report.add_argument("--summary", type=Path, required=True,
+    campaign_report.add_argument("--summary", type=_input, required=True,
                                  help="summary CSV of 'slipwave summary'")
-    campaign_report.add_argument("--fits", type=Path, default=None,
+    campaign_report.add_argument("--fits", type=_input, default=None,
                                  help="fits CSV of 'slipwave fits'")
-    campaign_report.add_argument("--comparisons", type=Path, nargs="*", default=[],
+    campaign_report.add_argument("--comparisons", type=_input, nargs="*", default=[],
                                  help="comparison JSON files of 'slipwave compare --json'")
-    campaign_report.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
+    campaign_report.add_argument("--map", type=_input, default=None, help="behaviour map netCDF")
     campaign_report.add_argument("--title", default="Campaign", help="the report's title")
     campaign_report.add_argument("-o", "--output", type=Path, required=True, help="HTML")
     campaign_report.add_argument("--pdf", type=Path, default=None, help="also write a PDF")
     campaign_report.set_defaults(run=_campaign_report)
 
+    check_config = commands.add_parser(
+        "check-config", help="check a campaign's config files and table as the workflow does",
+        description="Check config files (and the campaign table they name) as 'snakemake "
+        "--configfile' would, naming the file and line of each problem; Snakemake's own "
+        "reader stops at a file that is not YAML without naming the line.")
+    check_config.add_argument("configs", type=_input, nargs="*",
+                              help="the --configfile files of the run")
+    check_config.add_argument("--workflow-config", type=_input,
+                              default=Path("config/config.yaml"),
+                              help="the workflow's own config (%(default)s)")
+    check_config.set_defaults(run=_check_config)
+
     sim = commands.add_parser(
-        "simulate", parents=[detection, cache],
+        "simulate", parents=[detection, cache, memory],
         help="simulate a bench test with the frictional contact solver",
         description="Press the flat on the slab, then move it until gross sliding (or up to "
         "--max-travel), and write the zone evolution as netCDF.",
@@ -650,12 +789,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="E, MPa (%(default)s)")
     sim.add_argument("--poisson-ratio", type=float, default=default.POISSON_RATIO,
                      help="nu (%(default)s)")
-    sim.add_argument("--elements", type=int, default=default.MAP_ELEMENTS,
+    sim.add_argument("--elements", type=_setting("map", "elements"), default=default.MAP_ELEMENTS,
                      help="elements along the contact (%(default)s)")
     sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
     sim.add_argument("--fs", type=float, default=None,
                      help="static friction coefficient (required without --fit)")
-    sim.add_argument("--fit", type=Path, default=None,
+    sim.add_argument("--fit", type=_input, default=None,
                      help="simulate a test: its fit.json from 'slipwave fit' (its setup, its "
                      "chosen law and mesh); -o then writes the simulated recording")
     sim.add_argument("--contact", type=Path, default=None,
@@ -683,9 +822,6 @@ def build_parser() -> argparse.ArgumentParser:
                      "actuator, up to --max-travel in --travel-step steps")
     sim.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     sim.add_argument("--plot", type=Path, default=None, help="also draw the zones (PNG, SVG)")
-    sim.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
-                     help="refuse a run whose estimated memory exceeds this (default: "
-                     "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     sim.set_defaults(run=_simulate)
 
     mapping = commands.add_parser(
@@ -694,29 +830,26 @@ def build_parser() -> argparse.ArgumentParser:
         "joins the rows and numbers the behaviours; 'map figures' draws the map.",
     )
     steps = mapping.add_subparsers(dest="map_command", required=True, metavar="STEP")
-    row = steps.add_parser("row", parents=[cache], help="one H/L, every f")
+    row = steps.add_parser("row", parents=[cache, memory], help="one H/L, every f")
     row.add_argument("--height-ratio", type=_positive_float, required=True, help="H/L")
     row.add_argument("--frictions", type=_positive_float, nargs=3,
                      default=list(default.MAP_FRICTIONS),
                      metavar=("START", "STOP", "STEP"), help="friction coefficients "
                      "(%(default)s)")
-    row.add_argument("--elements", type=int, default=default.MAP_ELEMENTS,
+    row.add_argument("--elements", type=_setting("map", "elements"), default=default.MAP_ELEMENTS,
                      help="elements along the contact (%(default)s)")
-    row.add_argument("--shard", type=int, default=0,
+    row.add_argument("--shard", type=_non_negative_int, default=0,
                      help="which run of --shard-size coefficients of the row, from 0")
-    row.add_argument("--shard-size", type=int, default=0,
+    row.add_argument("--shard-size", type=_setting("map", "shard_size"), default=0,
                      help="coefficients per shard; 0: the whole row (%(default)s)")
-    row.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
-                     help="refuse a slab whose condensation would need more (default: "
-                     "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     _load_path_arguments(row, normal_control=default.MAP_NORMAL_CONTROL,
                          normal_friction="on" if default.MAP_NORMAL_FRICTION else "off")
-    row.add_argument("--min-zone", type=_positive_float, default=default.MIN_ZONE_MM,
+    row.add_argument("--min-zone", type=_setting("map", "min_zone_mm"), default=default.MIN_ZONE_MM,
                      help="shortest zone that decides anything, mm (%(default)s)")
     row.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
     row.set_defaults(run=_map_row)
     assemble = steps.add_parser("assemble", help="join rows and name the behaviours")
-    assemble.add_argument("rows", type=Path, nargs="+", help="netCDF rows of 'slipwave map row'")
+    assemble.add_argument("rows", type=_input, nargs="+", help="netCDF rows of 'slipwave map row'")
     assemble.add_argument("-o", "--output", type=Path, required=True, help="map netCDF")
     assemble.add_argument("--csv", type=Path, required=True, help="map table (CSV)")
     assemble.add_argument("--legend", type=Path, required=True,
@@ -725,28 +858,27 @@ def build_parser() -> argparse.ArgumentParser:
     figures = steps.add_parser("figures", parents=[cache],
                                help="draw the map and one zone history per "
                                "behaviour")
-    figures.add_argument("map", type=Path, help="map netCDF of 'slipwave map assemble'")
+    figures.add_argument("map", type=_input, help="map netCDF of 'slipwave map assemble'")
     figures.add_argument("--figure", type=Path, required=True, help="map figure (PNG)")
     figures.add_argument("--zones", type=Path, default=None,
                          help="zone histories of one case per behaviour (PNG)")
-    figures.add_argument("--summary", type=Path, default=None,
+    figures.add_argument("--summary", type=_input, default=None,
                          help="campaign summary CSV: tests placed on the map")
     figures.add_argument("--test-ratio", type=_column_pair, nargs="*", default=[],
                          metavar="TEST=H/L", help="H/L of each test's slab")
     figures.set_defaults(run=_map_figures)
 
     bench = commands.add_parser(
-        "bench", parents=[cache], help="generate a virtual-bench campaign (CSVs, videos, truth)",
+        "bench", parents=[cache, memory],
+        help="generate a virtual-bench campaign (CSVs, videos, truth)",
         description="Simulate each test of CONFIG (YAML: defaults and tests) on the virtual "
         "bench and write its acquisition CSV, video and ground truth.",
     )
-    bench.add_argument("config", type=Path, help="campaign YAML")
+    bench.add_argument("config", type=_input, help="campaign YAML")
     bench.add_argument("-o", "--output", type=Path, required=True, help="campaign folder")
-    bench.add_argument("--seed", type=int, default=0, help="noise seed of the first test (0)")
+    bench.add_argument("--seed", type=_non_negative_int,
+                       default=0, help="noise seed of the first test (0)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
-    bench.add_argument("--memory-limit", type=_positive_float, default=None, metavar="GB",
-                       help="refuse a test whose estimated memory exceeds this (default: "
-                       "$SLIPWAVE_MEMORY_LIMIT_GB, else the memory available)")
     bench.set_defaults(run=_bench)
 
     detect = commands.add_parser(
@@ -755,60 +887,61 @@ def build_parser() -> argparse.ArgumentParser:
         "write the events (CSV, and netCDF with the phase of every sample and the T/|N| "
         "ratios at gross slips).",
     )
-    detect.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
+    detect.add_argument("recording", type=_input, help="recording netCDF from 'slipwave ingest'")
     detect.add_argument("-o", "--output", type=Path, required=True, help="events CSV to write")
     detect.add_argument("--netcdf", type=Path, default=None,
                         help="also write events, phases and ratios as netCDF")
-    detect.add_argument("--test-id", default=None, help="test id (default: the recording's)")
-    detect.add_argument("--min-drop", type=float, default=None,
+    detect.add_argument("--min-drop", type=_positive_float, default=None,
                         help="smallest T drop, N (default: --threshold x T noise)")
-    detect.add_argument("--min-jump", type=float, default=None,
+    detect.add_argument("--min-jump", type=_positive_float, default=None,
                         help="smallest DG/DD jump, mm (default: --threshold x noise)")
-    detect.add_argument("--gross-edge-ratio", type=_positive_float,
+    detect.add_argument("--gross-edge-ratio", type=_setting("detection", "gross_edge_ratio"),
                         default=default.GROSS_EDGE_RATIO,
                         help="DG jump / DD jump from which a drop is a gross slip (%(default)s)")
-    detect.add_argument("--simulated", type=Path, default=None,
+    detect.add_argument("--simulated", type=_input, default=None,
                         help="the test's simulated recording ('slipwave simulate --fit'): its "
                         "gross_edge_ratio, read off the simulated slips, replaces "
                         "--gross-edge-ratio")
     detect.set_defaults(run=_detect)
 
     fit = commands.add_parser(
-        "fit", parents=[detection, cache], help="fit friction laws to a test through the solver",
+        "fit", parents=[detection, cache, memory],
+        help="fit friction laws to a test through the solver",
         description="Read the test's configuration from its recording and the campaign "
         "table's cells, then fit each friction law on the slip events (T/|N| at gross "
         "slips, their times, slip counts) with 95 %% intervals, and choose by AIC.")
-    fit.add_argument("recording", type=Path, help="recording netCDF from 'slipwave ingest'")
+    fit.add_argument("recording", type=_input, help="recording netCDF from 'slipwave ingest'")
     fit.add_argument("-o", "--output", type=Path, required=True, help="fit.json to write")
-    fit.add_argument("--test-id", default=None, help="test id (default: the recording's)")
     fit.add_argument("--setting", type=_setting_pair, nargs="*", default=[],
                      metavar="COLUMN=VALUE", help="the campaign table's cells (length_mm, "
                      "height_mm, width_mm, youngs_modulus_mpa, poisson_ratio, normal_load_n, "
                      "speed_mm_s, machine_stiffness_n_mm, edge_reference)")
     fit.add_argument("--laws", nargs="+", default=list(default.FIT_LAWS),
                      choices=list(default.FIT_LAWS), help="laws to fit (%(default)s)")
-    fit.add_argument("--elements", type=int, default=default.FIT_ELEMENTS,
+    fit.add_argument("--elements", type=_setting("fit", "elements"), default=default.FIT_ELEMENTS,
                      help="elements along the contact (%(default)s)")
-    fit.add_argument("--max-evaluations", type=int, default=default.FIT_MAX_EVALUATIONS,
+    fit.add_argument("--max-evaluations", type=_setting("fit", "max_evaluations"),
+                     default=default.FIT_MAX_EVALUATIONS,
                      help="simulations of each law's local search (%(default)s)")
-    fit.add_argument("--load-calibration", type=float, default=default.LOAD_CALIBRATION,
+    fit.add_argument("--load-calibration", type=_setting("fit", "load_calibration"),
+                     default=default.LOAD_CALIBRATION,
                      help="relative calibration uncertainty of each load cell (%(default)s)")
     fit.set_defaults(run=_fit)
 
     compare = commands.add_parser(
         "compare", parents=[detection],
         help="a test's measurement against its simulation, feature by feature")
-    compare.add_argument("events", type=Path, help="events netCDF of 'slipwave detect'")
-    compare.add_argument("--simulated", type=Path, required=True,
+    compare.add_argument("events", type=_input, help="events netCDF of 'slipwave detect'")
+    compare.add_argument("--simulated", type=_input, required=True,
                          help="simulated recording of 'slipwave simulate --fit'")
-    compare.add_argument("--scatter", type=Path, default=None,
+    compare.add_argument("--scatter", type=_input, default=None,
                          help="neighbouring simulations' features ('slipwave simulate "
                          "--scatter'): the simulation's own scatter widens the tolerances")
-    compare.add_argument("--steps", type=Path, default=None,
+    compare.add_argument("--steps", type=_input, default=None,
                          help="the solver's steps ('slipwave simulate --steps')")
-    compare.add_argument("--fit", type=Path, required=True, help="fit.json")
-    compare.add_argument("--waves", type=Path, default=None, help="waves CSV of the video")
-    compare.add_argument("--map", type=Path, default=None, help="behaviour map netCDF")
+    compare.add_argument("--fit", type=_input, required=True, help="fit.json")
+    compare.add_argument("--waves", type=_input, default=None, help="waves CSV of the video")
+    compare.add_argument("--map", type=_input, default=None, help="behaviour map netCDF")
     compare.add_argument("-o", "--output", type=Path, required=True, help="comparison CSV")
     compare.add_argument("--json", type=Path, default=None,
                          help="also write the verdict counts and the place on the map")
@@ -817,7 +950,7 @@ def build_parser() -> argparse.ArgumentParser:
     compare.set_defaults(run=_compare)
 
     fits = commands.add_parser("fits", help="the campaign's fits in one table")
-    fits.add_argument("fits", type=Path, nargs="+", help="fit.json files")
+    fits.add_argument("fits", type=_input, nargs="+", help="fit.json files")
     fits.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
     fits.add_argument("--plot", type=Path, default=None,
                       help="also draw T/|N| and the fitted coefficients against H/L")
@@ -826,7 +959,7 @@ def build_parser() -> argparse.ArgumentParser:
     summary = commands.add_parser(
         "summary", help="one row per test: T/|N| at gross slips, wave counts, phases",
     )
-    summary.add_argument("events", type=Path, nargs="+",
+    summary.add_argument("events", type=_input, nargs="+",
                          help="events netCDF files from 'slipwave detect --netcdf'")
     summary.add_argument("-o", "--output", type=Path, required=True, help="CSV to write")
     summary.set_defaults(run=_summary)
@@ -839,7 +972,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     kymo.add_argument("frames", type=Path, help="video file, image folder or TIFF stack")
     kymo.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
-    kymo.add_argument("--length", type=_positive_float, default=default.CONTACT_LENGTH_MM,
+    kymo.add_argument("--length", type=_setting("video", "length_mm"),
+                      default=default.CONTACT_LENGTH_MM,
                       help="contact length, mm (%(default)s)")
     kymo.add_argument("--band", type=float, nargs=2, default=list(default.BAND_MM),
                       metavar=("LOW", "HIGH"), help="band above the interface, mm (%(default)s)")
@@ -856,9 +990,9 @@ def build_parser() -> argparse.ArgumentParser:
     waves = commands.add_parser(
         "waves", help="track the waves of a kymograph, align the clocks, pair with events",
     )
-    waves.add_argument("kymograph", type=Path, help="netCDF from 'slipwave kymograph'")
-    waves.add_argument("--recording", type=Path, required=True, help="recording netCDF")
-    waves.add_argument("--events", type=Path, required=True, help="events netCDF")
+    waves.add_argument("kymograph", type=_input, help="netCDF from 'slipwave kymograph'")
+    waves.add_argument("--recording", type=_input, required=True, help="recording netCDF")
+    waves.add_argument("--events", type=_input, required=True, help="events netCDF")
     waves.add_argument("-o", "--output", type=Path, required=True, help="waves CSV to write")
     waves.add_argument("--fused", type=Path, required=True,
                        help="CSV of the events with their waves to write")
@@ -871,7 +1005,8 @@ def build_parser() -> argparse.ArgumentParser:
         "bench), one of them in the vendor flavour.",
     )
     sawtooth.add_argument("output", type=Path, help="folder to write into")
-    sawtooth.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    sawtooth.add_argument("--seed", type=_non_negative_int,
+                          default=0, help="noise seed (default 0)")
     sawtooth.set_defaults(run=_sawtooth)
     return parser
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from os import PathLike
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ import xarray as xr
 from slipwave.defaults import LOAD_CALIBRATION
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
+from slipwave.validation import read_json
 from slipwave.video.waves import MIN_EXTENT
 
 COMPARISON_COLUMNS = ("feature", "unit", "measured", "simulated", "scatter", "difference",
@@ -390,3 +392,26 @@ def verdict_counts(table: pd.DataFrame) -> Mapping[str, int]:
     """
     return {verdict: int((table["verdict"] == verdict).sum())
             for verdict in ("agrees", "differs", "not compared")}
+
+
+def read_comparison(path: str | PathLike[str]) -> dict[str, Any]:
+    """A comparison's JSON (``slipwave compare --json``), checked.
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    dict
+        ``test_id``, ``recording_sha256``, ``law``, ``parameters``, ``verdicts`` and,
+        when placed, ``map``.
+
+    Raises
+    ------
+    SlipwaveError
+        Naming the file and the key that is wrong.
+
+    """
+    return read_json(path, "comparison")

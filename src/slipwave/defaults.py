@@ -19,9 +19,30 @@ from slipwave.validation import load_schema
 _SETTINGS = load_schema("config")["properties"]
 
 
+def setting_schema(section: str, key: str) -> dict[str, Any]:
+    """The schema of the setting ``section.key`` (its type, bounds and default).
+
+    Parameters
+    ----------
+    section, key
+        The setting, e.g. ``"fit"``, ``"load_calibration"``.
+
+    Returns
+    -------
+    dict
+        Its JSON schema; the command line checks its options against it.
+
+    Examples
+    --------
+    >>> setting_schema("fit", "max_evaluations")["minimum"]
+    1
+    """
+    return dict(_SETTINGS[section]["properties"][key])
+
+
 def _setting(section: str, key: str) -> Any:
     """The schema's default of ``section.key``."""
-    return _SETTINGS[section]["properties"][key]["default"]
+    return setting_schema(section, key)["default"]
 
 
 CONVENTIONS = "CF-1.12"

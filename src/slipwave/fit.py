@@ -30,11 +30,11 @@ SlipWeakening(fs=1.0, fd=0.6, fs_final=None, runin_slips=0, dc=0.2)
 
 from __future__ import annotations
 
-import json
 import time as clock
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from itertools import pairwise
+from os import PathLike
 from typing import Any
 
 import numpy as np
@@ -46,9 +46,10 @@ from slipwave.compare import recurrence
 from slipwave.defaults import FIT_ELEMENTS, FIT_MAX_EVALUATIONS, LOAD_CALIBRATION
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
-from slipwave.setup import TestSetup
-from slipwave.solver import Coulomb, SlipWeakening, SolverCache, simulate
+from slipwave.setup import GEOMETRY, TestSetup
+from slipwave.solver import Coulomb, SlipWeakening, SolverCache
 from slipwave.solver.signals import clean_signals, step_times
+from slipwave.validation import read_json, setup_value_problem
 
 LAWS: dict[str, tuple[str, ...]] = {
     "coulomb": ("fs", "fd"),
@@ -390,13 +391,18 @@ def measured_events(recording: xr.Dataset, *,
 
     """
     events = detect_events(recording, **detection.keywords())
-    source = recording.attrs.get("test_id", recording.attrs.get("source", "the recording"))
+    test_id = recording.attrs.get("test_id", "?")
     if events.empty:
-        raise SlipwaveError(f"test {source!r}: no slip in the recording, nothing to fit")
+        raise SlipwaveError(f"test {test_id!r}: no slip detected in "
+                            f"{recording.attrs.get('source', 'the recording')} (T never drops "
+                            "by more than the detection's threshold): no friction law can be "
+                            "fitted on stick alone")
     if events["ratio_before"].isna().all():
-        raise SlipwaveError(f"test {source!r}: no N channel, T/|N| unknown: nothing to fit")
+        raise SlipwaveError(f"test {test_id!r}: no N channel: the fit compares T/|N| at each "
+                            "slip, and a nominal normal_load_n cannot stand in for the N that "
+                            "moves with every slip; a recording with N is needed")
     if events["DG_jump"].isna().all() or events["DD_jump"].isna().all():
-        raise SlipwaveError(f"test {source!r}: no DG and DD channels: gross slips cannot be "
+        raise SlipwaveError(f"test {test_id!r}: no DG and DD channels: gross slips cannot be "
                             "told from partial ones, nothing to fit")
     time = recording["time"].values
     events.attrs["duration"] = float(time[-1] - time[0])
@@ -760,7 +766,6 @@ class LawObjective:
                  cache: SolverCache):
         self.setup, self.law, self.elements = setup, law, elements
         self.detection, self.solver_cache = detection, cache
-        self.slab, self.path = setup.slab(elements), setup.load_path()
         self.calibration_error = calibration_error
         self.names = LAWS[law]
         self.sizes = {"min_drop": float(measured.attrs.get("min_drop", 0.0)),
@@ -811,8 +816,8 @@ class LawObjective:
 
         """
         params = dict(zip(self.names, theta, strict=True))
-        simulation = simulate(self.slab, law_of(self.law, params), self.path,
-                              cache=self.solver_cache)
+        simulation = self.setup.simulate(law_of(self.law, params), self.elements,
+                                         cache=self.solver_cache)
         events = simulated_events(simulation, self.setup, min_drop=self.sizes["min_drop"],
                                   sample_rate=self.sizes["sample_rate"],
                                   detection=self.detection)
@@ -1217,8 +1222,7 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *,
 
     """
     fd = _fd_start(measured)
-    simulation = simulate(setup.slab(elements), Coulomb(fs=fd + 0.3, fd=fd),
-                          setup.load_path(), cache=cache)
+    simulation = setup.simulate(Coulomb(fs=fd + 0.3, fd=fd), elements, cache=cache)
     return detected_edge_threshold(simulation, setup,
                                    min_drop=float(measured.attrs.get("min_drop", 0.0)),
                                    sample_rate=float(measured.attrs["sample_rate"]),
@@ -1401,8 +1405,12 @@ def chosen_law(fit: Mapping[str, Any]) -> Coulomb:
     return law_of(fit["chosen"], fit["parameters"])
 
 
-def read_fit(path: str) -> dict[str, Any]:
-    """A ``fit.json``, with an error naming the file when it is not one.
+def read_fit(path: str | PathLike[str]) -> dict[str, Any]:
+    """A ``fit.json``, checked, with an error naming the file and the key when it is not one.
+
+    The file is held to ``slipwave/schemas/fit.schema.json``, and what a schema cannot
+    say is checked too: the chosen law is one of the fitted laws, its parameters are
+    that law's and make a law the solver takes, and the setup is a slab's.
 
     Parameters
     ----------
@@ -1414,12 +1422,31 @@ def read_fit(path: str) -> dict[str, Any]:
     dict
         Its content (:func:`fit_test`).
 
+    Raises
+    ------
+    SlipwaveError
+        ``<path>: <key>: <what is wrong>`` (or the line and column of broken JSON).
+
     """
+    fit = read_json(path, "fit")
+    chosen = fit["chosen"]
+    if chosen not in fit["laws"]:
+        raise SlipwaveError(f"{path}: chosen: {chosen!r} is not one of the fitted laws "
+                            f"{sorted(fit['laws'])}")
+    names = set(LAWS[chosen])
+    for where, values in [("parameters", fit["parameters"]),
+                          (f"laws.{chosen}.parameters", fit["laws"][chosen]["parameters"])]:
+        if set(values) != names:
+            raise SlipwaveError(f"{path}: {where}: {sorted(values)} are not the parameters of "
+                                f"the {chosen} law, {sorted(names)}")
     try:
-        with open(path, encoding="utf-8") as stream:
-            fit = json.load(stream)
-    except (OSError, json.JSONDecodeError) as err:
-        raise SlipwaveError(f"{path}: cannot read the fit: {err}") from err
-    if not isinstance(fit, dict) or "chosen" not in fit or "parameters" not in fit:
-        raise SlipwaveError(f"{path}: not a fit (no 'chosen' law and 'parameters')")
-    return fit
+        law_of(chosen, fit["parameters"])
+        setup = TestSetup.from_dict(fit["setup"])
+        for key in GEOMETRY:
+            problem = setup_value_problem(key, setup[key])
+            if problem is not None:
+                raise SlipwaveError(f"setup.{key}.value: {problem}")
+        setup.slab(int(fit["elements"]))
+    except SlipwaveError as err:
+        raise SlipwaveError(f"{path}: {err}") from err
+    return dict(fit)

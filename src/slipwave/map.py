@@ -123,6 +123,7 @@ def map_row(
     }
     attrs: dict[str, str | int | float] = {
         "title": "slipwave behaviour map",
+        "product": "map row",
         "Conventions": CONVENTIONS,
         "source": f"slipwave {__version__} slipwave.map.map_row",
         "contact_elements": elements,
@@ -244,6 +245,7 @@ def assemble_map(rows: Sequence[xr.Dataset]) -> xr.Dataset:
     whole["cases"] = ("behaviour_id", np.array([counts[s] for s in order], dtype=np.int32),
                       {"long_name": "cases showing the behaviour", "units": "1"})
     whole.attrs["source"] = f"slipwave {__version__} slipwave.map.assemble_map"
+    whole.attrs["product"] = "behaviour map"
     whole.attrs.pop("condensation_s", None)
     return whole
 

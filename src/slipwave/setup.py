@@ -20,8 +20,10 @@ import numpy as np
 import xarray as xr
 
 from slipwave.defaults import TRAVEL_STEP_MM
-from slipwave.errors import SlipwaveError
-from slipwave.solver import LoadPath, Slab
+from slipwave.errors import SlipwaveError, SolverError
+from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, simulate
+from slipwave.solver.slab import condensation_memory
+from slipwave.validation import setup_value_problem
 
 GEOMETRY = {
     "length_mm": "contact length L, mm",
@@ -106,6 +108,69 @@ class TestSetup:
                         poisson_ratio=self["poisson_ratio"], elements=elements)
         except SlipwaveError as err:
             raise SlipwaveError(f"test {self.test_id!r}: {err}") from err
+
+    def simulate(self, friction: Coulomb, elements: int, *,
+                 cache: SolverCache | None = None) -> xr.Dataset:
+        """The test simulated: its slab and load path with ``friction``.
+
+        Parameters
+        ----------
+        friction
+            The friction law.
+        elements
+            Elements along the contact.
+        cache
+            The solver's cache (:func:`slipwave.solver.simulate`).
+
+        Returns
+        -------
+        xarray.Dataset
+            :func:`slipwave.solver.simulate`'s steps.
+
+        Raises
+        ------
+        SlipwaveError
+            Naming the test and its setup, when the solver fails on it.
+
+        """
+        try:
+            return simulate(self.slab(elements), friction, self.load_path(), cache=cache)
+        except SolverError as err:
+            settings = ", ".join(f"{key} {self[key]:.4g} ({self.settings[key].source})"
+                                 for key in ("youngs_modulus_mpa", "normal_load_n",
+                                             "height_mm", "machine_stiffness_n_mm"))
+            raise SlipwaveError(
+                f"test {self.test_id!r}: the solver failed at {err} with {friction} and "
+                f"{elements} elements; a setup far from a compliant slab's does that: check "
+                f"{settings}") from err
+
+    def simulation_memory(self, elements: int, sample_rate: float) -> int:
+        """Bytes a simulation of the test takes at its peak, estimated before it starts.
+
+        The slab's condensation (:func:`~slipwave.solver.slab.condensation_memory`),
+        the solver's steps (a few dozen arrays over the contact's nodes each), and the
+        sampled recording with its working copies.
+
+        Parameters
+        ----------
+        elements
+            Elements along the contact.
+        sample_rate
+            Of the simulated recording, Hz.
+
+        Returns
+        -------
+        int
+            The estimate, bytes (the measured peak is below it).
+
+        """
+        slab = self.slab(elements)
+        path = self.load_path()
+        steps = path.normal_steps + (path.max_travel or 0.0) / (path.travel_step or 1.0)
+        nodes = elements + 1
+        samples = self["duration_s"] * sample_rate
+        total = condensation_memory(slab) + steps * nodes * 8 * 48 + samples * 8 * 8 * 4
+        return int(min(total, 2.0**62))
 
     def load_path(self) -> LoadPath:
         """The test's load path: N held, the flat driven through the machine's spring.
@@ -235,7 +300,13 @@ def normal_load_plateau(recording: xr.Dataset) -> float:
     if not before.any():
         raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: the tangential "
                             "loading starts with the recording: no normal-load plateau")
-    return float(np.nanmedian(np.abs(recording["N"].values[before])))
+    plateau = float(np.nanmedian(np.abs(recording["N"].values[before])))
+    if not plateau > 0:
+        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: N reads {plateau:g} "
+                            f"N over the second before T rises (t = {time[start]:.4g} s): no "
+                            "normal load measured; check the N column, or give the column "
+                            "normal_load_n")
+    return plateau
 
 
 def normal_loading_time(recording: xr.Dataset, plateau: float) -> float:
@@ -265,18 +336,22 @@ def normal_loading_time(recording: xr.Dataset, plateau: float) -> float:
     return float(time[int(np.argmax(reached))] - time[0])
 
 
-def drive(recording: xr.Dataset) -> tuple[float, float]:
+def drive(recording: xr.Dataset, *, stiffness: float | None = None) -> tuple[float, float]:
     """The drive's speed (mm/s) and the machine's stiffness (N/mm), from T and DT.
 
     The actuator at X = V t + X0 drives the flat through the machine's spring, so at
     every sample, stick or slip, T = k (X - DT): DT = V t - T / k + X0. A least-squares
     fit of DT on t and T over the tangential loading gives V and k at once (a slope of
-    DT alone would miss V by the spring's growing stretch as T rises).
+    DT alone would miss V by the spring's growing stretch as T rises); with k given,
+    of DT + T / k on t, V alone. Samples from where a sensor saturated (the ingest's
+    ``saturated_from_index``) are left out.
 
     Parameters
     ----------
     recording
         With T and DT channels.
+    stiffness
+        The machine's stiffness when known, N/mm (then returned as it is).
 
     Returns
     -------
@@ -290,14 +365,30 @@ def drive(recording: xr.Dataset) -> tuple[float, float]:
 
     """
     test_id = recording.attrs.get("test_id", "?")
+    wanted = "speed_mm_s" if stiffness is not None else "speed_mm_s and machine_stiffness_n_mm"
     if "DT" not in recording:
         raise SlipwaveError(f"test {test_id!r}: no DT channel to measure the drive on; add "
-                            "the columns speed_mm_s and machine_stiffness_n_mm")
+                            f"the column(s) {wanted}")
     window = _tangential_window(recording)
+    for channel in ("T", "DT"):
+        clipped = int(recording[channel].attrs.get("saturated_from_index", -1))
+        if clipped >= 0:
+            window = window[window < clipped]
+    if window.size < 10:
+        raise SlipwaveError(f"test {test_id!r}: fewer than 10 samples of tangential loading "
+                            f"before T or DT saturates: add the column(s) {wanted}")
     time = recording["time"].values[window]
     T = recording["T"].values[window]
     travel = recording["DT"].values[window]
     good = np.isfinite(T) & np.isfinite(travel)
+    if stiffness is not None:
+        design = np.column_stack([time[good], np.ones(int(good.sum()))])
+        (speed, _), *_ = np.linalg.lstsq(design, travel[good] + T[good] / stiffness,
+                                         rcond=None)
+        if not (np.isfinite(speed) and speed > 0):
+            raise SlipwaveError(f"test {test_id!r}: the drive does not advance (speed "
+                                f"{speed:.3g} mm/s from DT and T); add the column speed_mm_s")
+        return float(speed), float(stiffness)
     design = np.column_stack([time[good], T[good], np.ones(int(good.sum()))])
     (speed, compliance, _), rss, *_ = np.linalg.lstsq(design, travel[good], rcond=None)
     # the compliance's standard error: a spring must show, at three of them
@@ -306,6 +397,9 @@ def drive(recording: xr.Dataset) -> tuple[float, float]:
     if not -compliance > 3.0 * error:
         raise SlipwaveError(f"test {test_id!r}: DT does not give way as T rises (no machine "
                             "spring to measure); add the column machine_stiffness_n_mm")
+    if not speed > 0:
+        raise SlipwaveError(f"test {test_id!r}: the drive does not advance (speed {speed:.3g} "
+                            "mm/s from DT and T); add the column speed_mm_s")
     return float(speed), float(-1.0 / compliance)
 
 
@@ -340,18 +434,18 @@ def read_test_setup(recording: xr.Dataset, cells: Mapping[str, Any]) -> TestSetu
     def given(key: str) -> Setting | None:
         cell = str(cells.get(key, "") or "").strip()
         if cell:
-            try:
-                value = float(cell)
-            except ValueError:
-                value = float("nan")
-            if not (np.isfinite(value) and value > 0):
-                raise SlipwaveError(f"test {test_id!r}: campaign-table column {key} is "
-                                    f"{cell!r}, not a positive number")
-            return Setting(value, "campaign table")
+            problem = setup_value_problem(key, cell)
+            if problem is not None:
+                raise SlipwaveError(f"test {test_id!r}: campaign-table column {key}: {problem}")
+            return Setting(float(cell), "campaign table")
         if key in recording.attrs:
-            value = float(recording.attrs[key])
-            if np.isfinite(value) and value > 0:
-                return Setting(value, "recording header")
+            problem = setup_value_problem(key, recording.attrs[key])
+            if problem is not None:
+                source = recording.attrs.get("source", "the recording")
+                raise SlipwaveError(f"test {test_id!r}: {source}'s header line {key}: "
+                                    f"{problem}; correct it, or give the column {key} in "
+                                    "the campaign table (it wins over the header)")
+            return Setting(float(recording.attrs[key]), "recording header")
         return None
 
     settings: dict[str, Setting] = {}
@@ -371,7 +465,7 @@ def read_test_setup(recording: xr.Dataset, cells: Mapping[str, Any]) -> TestSetu
     # The drive's real speed, not the header's nominal one, and the machine's spring.
     speed, stiffness = given("speed_mm_s"), given("machine_stiffness_n_mm")
     if (speed is None or speed.source == "recording header" or stiffness is None):
-        measured = drive(recording)
+        measured = drive(recording, stiffness=None if stiffness is None else stiffness.value)
         how = "measured: least squares of DT on t and T over the tangential loading"
         if speed is None or speed.source == "recording header":
             speed = Setting(measured[0], how)
@@ -383,8 +477,13 @@ def read_test_setup(recording: xr.Dataset, cells: Mapping[str, Any]) -> TestSetu
     interval = float(np.median(np.diff(time))) if time.size > 1 else 0.0
     settings["duration_s"] = Setting(float(time[-1] - time[0]) + interval,
                                      "recording length (samples times interval)")
-    settings["loading_time_s"] = Setting(normal_loading_time(recording, normal.value),
-                                         "measured: |N| reaching 99 % of its plateau")
+    if "N" in recording:
+        settings["loading_time_s"] = Setting(normal_loading_time(recording, normal.value),
+                                             "measured: |N| reaching 99 % of its plateau")
+    else:  # the normal load given, no N to time its loading on: T's rise starts after it
+        settings["loading_time_s"] = Setting(
+            float(time[_tangential_window(recording)[0]] - time[0]),
+            "no N channel: the time T starts to rise")
     reference = str(cells.get("edge_reference", "") or "").strip()
     if reference not in EDGE_REFERENCES:
         what = f"is {reference!r}" if reference else "is not given"

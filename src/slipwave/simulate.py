@@ -27,7 +27,7 @@ from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_
 from slipwave.fit import detected_edge_threshold, simulated_recording
 from slipwave.photoelastic import Camera, Photoelastic
 from slipwave.setup import TestSetup
-from slipwave.solver import Coulomb, Slab, SolverCache, simulate
+from slipwave.solver import Coulomb, Slab, SolverCache
 from slipwave.solver.signals import step_times
 
 STATE_NAMES = "open stick slip"
@@ -93,9 +93,10 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
 
     """
     slab = setup.slab(elements)
-    simulation = simulate(slab, friction, setup.load_path(), cache=cache)
+    simulation = setup.simulate(friction, elements, cache=cache)
     recording = simulated_recording(simulation, setup, sample_rate=sample_rate)
     recording.attrs.update({
+        "product": "simulated recording",
         "test_id": setup.test_id, "source": f"simulation of {setup.test_id}",
         "sample_rate_hz": sample_rate, "edge_reference": setup.edge_reference,
         "gross_edge_ratio": detected_edge_threshold(simulation, setup, min_drop=min_drop,
@@ -107,6 +108,7 @@ def replay_test(setup: TestSetup, friction: Coulomb, *, min_drop: float, element
     times = step_times(simulation, speed=setup["speed_mm_s"],
                        loading_time=setup["loading_time_s"])
     contact = contact_history(simulation, times, slab if kymograph else None, band_mm=band_mm)
+    contact.attrs.update(product="contact history", test_id=setup.test_id)
     return Replay(simulation, recording, contact)
 
 
@@ -177,7 +179,7 @@ def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
     """
     rows = []
     for law in neighbouring_laws(friction, step):
-        simulation = simulate(setup.slab(elements), law, setup.load_path(), cache=cache)
+        simulation = setup.simulate(law, elements, cache=cache)
         events = detect_events(simulated_recording(simulation, setup, sample_rate=sample_rate),
                                **detection.keywords(min_drop=min_drop, edge_convention="x_axis",
                                                     gross_edge_ratio=gross_edge_ratio))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from collections.abc import Callable, Sequence
 from importlib import resources
 from os import PathLike
@@ -17,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import jsonschema
+import referencing
 import yaml
 
 from slipwave.errors import ConfigError
@@ -55,6 +57,62 @@ def load_schema(name: str) -> dict[str, Any]:
 
     """
     return dict(json.loads(schema_path(name).read_text()))
+
+
+@functools.cache
+def _registry() -> referencing.Registry:
+    """The shipped schemas, by their ``$id``: one schema may refer to another's settings."""
+    resources_by_id = []
+    for path in sorted(schema_path("config").parent.glob("*.schema.json")):
+        contents = json.loads(path.read_text())
+        resources_by_id.append((contents["$id"], referencing.Resource.from_contents(contents)))
+    return referencing.Registry().with_resources(resources_by_id)
+
+
+@functools.cache
+def _setup_numbers() -> dict[str, dict[str, Any]]:
+    return {key: item["x-number"] for key, item in load_schema("tests")["properties"].items()
+            if "x-number" in item}
+
+
+def setup_value_problem(key: str, text: object) -> str | None:
+    """What is wrong with a value of a test's setup, or ``None``.
+
+    The campaign table's cells and the recording header's values of the same names
+    (``length_mm``, ``poisson_ratio``...) are held to one schema: the campaign
+    table's ``x-number``.
+
+    Parameters
+    ----------
+    key
+        The column (or header key).
+    text
+        Its value, as written.
+
+    Returns
+    -------
+    str or None
+        The problem in words.
+
+    Examples
+    --------
+    >>> setup_value_problem("poisson_ratio", "0.48") is None
+    True
+    >>> setup_value_problem("poisson_ratio", "0.6")
+    '0.6 is greater than or equal to the maximum of 0.5'
+    >>> setup_value_problem("height_mm", "abc")
+    "'abc' is not a number"
+    """
+    try:
+        value = float(str(text).strip())
+    except ValueError:
+        return f"{str(text).strip()!r} is not a number"
+    if not math.isfinite(value):
+        return f"{value} is not a finite number"
+    schema = _setup_numbers().get(key, {})
+    error = jsonschema.exceptions.best_match(
+        jsonschema.Draft202012Validator(schema).iter_errors(value))
+    return None if error is None else str(error.message)
 
 
 def describe_path(path: Sequence[str | int], document: Any = None) -> str:
@@ -114,7 +172,7 @@ def check(instance: Any, schema: dict[str, Any], *, source: str,
         ``<source>, line <n>: <setting>: <what is wrong>``.
 
     """
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = jsonschema.Draft202012Validator(schema, registry=_registry())
     error = jsonschema.exceptions.best_match(validator.iter_errors(instance))
     if error is None:
         return
@@ -170,3 +228,45 @@ def read_yaml(path: str | PathLike[str]) -> tuple[Any, Callable[[Sequence[str | 
         return None if current is None else current.start_mark.line + 1
 
     return content, line_of
+
+
+def read_json(path: str | PathLike[str], schema: str) -> dict[str, Any]:
+    """A JSON product of slipwave's, held to its schema.
+
+    Parameters
+    ----------
+    path
+        The file.
+    schema
+        The shipped schema's name (``"fit"``, ``"comparison"``).
+
+    Returns
+    -------
+    dict
+        Its content.
+
+    Raises
+    ------
+    ConfigError
+        ``<path>, line <n>, column <m>: not valid JSON`` or ``<path>: <key>: <what is
+        wrong>``.
+
+    """
+    try:
+        with open(path, encoding="utf-8") as stream:
+            content = json.load(stream)
+    except json.JSONDecodeError as err:
+        raise ConfigError(f"{path}, line {err.lineno}, column {err.colno}: not valid JSON "
+                          f"({err.msg})") from err
+    except UnicodeDecodeError as err:
+        raise ConfigError(f"{path}: not UTF-8 text, not JSON") from err
+    except FileNotFoundError as err:
+        raise ConfigError(f"{path}: no such file") from err
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot be read: {err.strerror}") from err
+    loaded = load_schema(schema)
+    try:
+        check(content, loaded, source=str(path))
+    except ConfigError as err:
+        raise ConfigError(f"{err} (not the {schema} JSON slipwave writes, or edited)") from err
+    return dict(content)

@@ -24,5 +24,5 @@ rule detect:
         "../envs/slipwave.yaml"
     shell:
         "slipwave detect {input.recording:q} -o {output.csv:q} --netcdf {output.netcdf:q} "
-        "--test-id {wildcards.test_id:q} {params.detection} {params.simulated} "
+        "{params.detection} {params.simulated} "
         "> {log:q} 2>&1"

@@ -26,7 +26,7 @@ rule fit:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave fit {input:q} -o {output:q} --test-id {wildcards.test_id:q} "
+        "slipwave fit {input:q} -o {output:q} "
         "--setting {params.settings} --laws {params.laws} --elements {params.elements} "
         "--max-evaluations {params.max_evaluations} "
         "--load-calibration {params.load_calibration} {params.detection} {params.cache} "

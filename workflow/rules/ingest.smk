@@ -15,4 +15,5 @@ rule ingest:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave ingest {input.csv:q} -o {output:q} --columns {params.columns:q} > {log:q} 2>&1"
+        "slipwave ingest {input.csv:q} -o {output:q} --test-id {wildcards.test_id:q} "
+        "--columns {params.columns:q} > {log:q} 2>&1"

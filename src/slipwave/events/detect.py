@@ -414,6 +414,8 @@ def detect_events(
     drops = load_drops(time, load, min_drop=min_drop, threshold=threshold,
                        max_spike=max_spike, max_duration=max_duration,
                        min_fall_rate=min_fall_rate)
+    if len(drops) == 0:
+        _check_direction(source, time, load)
     warnings: list[str] = []
     convention, evidence = _convention(recording, time, load, drops, edge_convention, warnings)
     jumps: dict[str, pd.DataFrame] = {}
@@ -479,6 +481,23 @@ def detect_events(
     return result
 
 
+def _check_direction(source: object, time: np.ndarray, load: np.ndarray) -> None:
+    """Refuse a test loaded along -x: T falls from its start where it should rise."""
+    finite = np.isfinite(load)
+    if finite.sum() < 10:
+        return
+    values = load[finite]
+    start = float(np.median(values[: max(5, values.size // 100)]))
+    low, high = np.percentile(values - start, [1, 99])
+    if -low > 3.0 * max(high, 0.0) and -low > 0.0:
+        at = float(time[finite][int(np.argmin(values))])
+        raise SlipwaveError(
+            f"{source}: T falls from {start:.3g} N to {start + low:.3g} N (lowest at t = "
+            f"{at:.4g} s) and no drop of T is found: the test was loaded along -x; slipwave "
+            "reads T positive along the drive (+x) and its slips as drops of T; record T "
+            "along +x, or negate T, DG, DD and DT in a copy of the file")
+
+
 def events_dataset(events: pd.DataFrame, phase: xr.DataArray) -> xr.Dataset:
     """Events (along ``event``), phases (along ``time``) and friction ratios in one Dataset.
 
@@ -512,7 +531,7 @@ def events_dataset(events: pd.DataFrame, phase: xr.DataArray) -> xr.Dataset:
     dataset = xr.merge([dataset, phase.to_dataset(), ratio], combine_attrs="override")
     attrs = {str(k): v for k, v in events.attrs.items() if k != "warnings"}
     dataset.attrs = {**attrs, "warnings": events.attrs.get("warnings", ""),
-                     **wave_counts(events)}
+                     **wave_counts(events), "product": "events"}
     return dataset
 
 

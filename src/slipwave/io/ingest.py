@@ -602,6 +602,49 @@ def _nan_runs(values: np.ndarray) -> tuple[int, int, int]:
     return count, int(starts.sum()), int(np.argmax(missing))
 
 
+SATURATION_RUN = 50
+"""Samples in a row at a channel's extreme value from which it reads as clipped."""
+
+
+def saturation(values: np.ndarray, *, min_run: int = SATURATION_RUN) -> int:
+    """Where a channel sits at its extreme value, as a clipped sensor does: first index.
+
+    A sensor at the end of its range (or a card at full scale) repeats one value
+    exactly, its largest or smallest; noise never holds a value that long.
+
+    Parameters
+    ----------
+    values
+        The channel.
+    min_run
+        Samples in a row at the extreme (and at least 1 % of the channel) that mark it.
+
+    Returns
+    -------
+    int
+        The first sample of the first such run, or -1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ramp = np.minimum(np.linspace(0.0, 30.0, 1000), 25.0)
+    >>> saturation(ramp), saturation(np.sin(np.arange(1000.0)))
+    (833, -1)
+    """
+    finite = values[np.isfinite(values)]
+    if finite.size == 0 or finite.min() == finite.max():
+        return -1
+    run = max(min_run, values.size // 100)
+    for extreme in (finite.max(), finite.min()):
+        at = np.concatenate([[False], values == extreme, [False]])
+        edges = np.flatnonzero(np.diff(at.astype(np.int8)))
+        starts, ends = edges[::2], edges[1::2]
+        long = np.flatnonzero(ends - starts >= run)
+        if long.size:
+            return int(starts[long[0]])
+    return -1
+
+
 def read_acquisition(
     path: str | PathLike[str], *, columns: Mapping[str, str] | None = None
 ) -> xr.Dataset:
@@ -622,8 +665,12 @@ def read_acquisition(
         Dimension ``time`` (s); variables ``T``, ``N`` and whichever of
         ``DG``, ``DD``, ``DT`` the file has, float64 with ``units`` and
         ``long_name``. Global attributes: every metadata key, ``Conventions``,
-        ``source``, ``source_sha256``, ``source_format``, ``missing_channels``
-        and ``warnings`` (one per line, empty when none).
+        ``source``, ``source_sha256``, ``source_format``, ``missing_channels``,
+        ``warnings`` (one per line, empty when none) and the identity every product
+        made from it carries (:mod:`slipwave.identity`): ``product`` ("recording"),
+        ``test_id`` (the header's, else the file's name without its suffix) and
+        ``recording_sha256`` (``source_sha256``). A channel that sits at its extreme
+        value (:func:`saturation`) has ``saturated_from_index``.
 
     Raises
     ------
@@ -679,6 +726,13 @@ def read_acquisition(
                 f"{channel}: {count} missing value(s) in {runs} run(s), first at line "
                 f"{lines[first]}"
             )
+        clipped = saturation(values[channel])
+        if clipped >= 0:
+            attrs["saturated_from_index"] = clipped
+            head.warnings.append(
+                f"{channel}: stays at {values[channel][clipped]:.6g} {attrs.get('units', '')} "
+                f"from line {lines[clipped]} on, as a sensor at the end of its range does: "
+                "the values beyond it are lost (the fit leaves them out)")
         data_vars[channel] = xr.Variable("time", values[channel], attrs)
     if "N" in data_vars:
         _note_normal_sign(data_vars["N"])
@@ -689,6 +743,10 @@ def read_acquisition(
         Conventions=CONVENTIONS,
         source=path.name,
         source_sha256=digest.hexdigest(),
+        # the recording's identity, which every product made from it carries
+        product="recording",
+        test_id=str(head.metadata.get("test_id") or path.stem),
+        recording_sha256=digest.hexdigest(),
         source_format=(
             f"separator {head.separator!r}, decimal {head.decimal!r}, encoding "
             f"{head.encoding}, header line {head.header_line}, data from line {head.data_line}"

@@ -10,6 +10,7 @@ import numpy as np
 import xarray as xr
 
 from slipwave.errors import SlipwaveError
+from slipwave.identity import check_product
 from slipwave.io.atomic import atomic_output
 
 
@@ -65,13 +66,16 @@ def write_dataset(ds: xr.Dataset, path: str | PathLike[str]) -> Path:
     return target
 
 
-def read_dataset(path: str | PathLike[str]) -> xr.Dataset:
+def read_dataset(path: str | PathLike[str], product: str | None = None) -> xr.Dataset:
     """Load a Dataset written by :func:`write_dataset` fully into memory.
 
     Parameters
     ----------
     path
         The netCDF file.
+    product
+        The kind of product it must be (:data:`slipwave.identity.PRODUCTS`);
+        ``None``: any.
 
     Returns
     -------
@@ -85,7 +89,10 @@ def read_dataset(path: str | PathLike[str]) -> xr.Dataset:
 
     """
     try:
-        return xr.load_dataset(path, engine="netcdf4", decode_timedelta=False)
+        dataset = xr.load_dataset(path, engine="netcdf4", decode_timedelta=False)
     except (OSError, ValueError) as err:
         raise SlipwaveError(f"{path}: cannot be read as netCDF: {err}") from err
+    if product is not None:
+        check_product(dataset.attrs, product, path)
+    return dataset
 

@@ -7,7 +7,7 @@
 - :mod:`slipwave.video.fuse`: load events paired with waves.
 """
 
-from slipwave.video.clock import ClockFit, align_clocks, on_card_clock
+from slipwave.video.clock import ClockFit, align_clocks, on_card_clock, read_clock
 from slipwave.video.frames import Frame, FrameSource, open_frames
 from slipwave.video.fuse import fuse
 from slipwave.video.kymograph import Geometry, find_geometry, kymograph
@@ -15,5 +15,6 @@ from slipwave.video.waves import WAVE_COLUMNS, track_waves
 
 __all__ = [
     "WAVE_COLUMNS", "ClockFit", "Frame", "FrameSource", "Geometry", "align_clocks",
-    "find_geometry", "fuse", "kymograph", "on_card_clock", "open_frames", "track_waves",
+    "find_geometry", "fuse", "kymograph", "on_card_clock", "open_frames", "read_clock",
+    "track_waves",
 ]

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -257,3 +259,32 @@ def align_clocks(
                        f"{method}, then {int(close.sum())} wave/event pairs",
                        int(close.sum()))
     return fit
+
+
+def read_clock(path: str | PathLike[str]) -> ClockFit:
+    """A camera clock's fit, from its JSON (``slipwave waves --clock``).
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    ClockFit
+        The fit.
+
+    Raises
+    ------
+    SlipwaveError
+        Naming the file, when it cannot be read or is not such a fit.
+
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise SlipwaveError(f"{path}: cannot be read as a clock fit: {err}") from err
+    try:
+        return ClockFit.from_json(text)
+    except SlipwaveError as err:
+        raise SlipwaveError(f"{path}: {err}") from err

@@ -365,7 +365,7 @@ def _kymograph(frames: Iterable[Frame], geometry: Geometry, band_mm: tuple[float
             "x": ("x", x, {"units": "mm", "long_name": "position along the contact, "
                                                        "origin at its centre"}),
         },
-        attrs={"band_mm": list(band_mm),
+        attrs={"product": "kymograph", "band_mm": list(band_mm),
                "frame_gaps": "; ".join(f"{a:.3f}-{b:.3f} s ({n} frames)" for a, b, n in gaps),
                **{f"geometry_{k}": v
                                             for k, v in asdict(geometry).items()}},
