@@ -24,7 +24,7 @@ import xarray as xr
 
 from fuzzing import valid_fit
 from slipwave.cli import main
-from slipwave.io import read_dataset, write_dataset
+from slipwave.io import read_dataset, read_table, write_dataset
 from slipwave.io.atomic import remove_stale_parts
 
 ROOT = Path(__file__).parents[1]
@@ -110,6 +110,10 @@ def made(tmp_path_factory):
         content = json.loads(p[name].read_text())
         p[f"other/{name}"] = other / name
         p[f"other/{name}"].write_text(json.dumps({**content, "test_id": "hl075"}))
+    for name in ("events.csv", "comparison.csv", "simulated_events.csv"):
+        p[f"other/{name}"] = other / name
+        p[f"other/{name}"].write_text(p[name].read_text().replace("# test_id: hl050",
+                                                                  "# test_id: hl075"))
     p["csv"] = csv
     return p
 
@@ -132,9 +136,14 @@ def edited_fit(made, folder: Path, **changes: object) -> Path:
 
 
 def test_the_products_carry_their_test(made):
+    sha = read_dataset(made["rec.nc"]).attrs["recording_sha256"]
     for name in ("rec.nc", "events.nc", "sim.nc", "contact.nc", "steps.nc"):
         attrs = read_dataset(made[name]).attrs
-        assert attrs["test_id"] == "hl050" and len(attrs["recording_sha256"]) == 64, name
+        assert attrs["test_id"] == "hl050" and attrs["recording_sha256"] == sha, name
+    for name in ("events.csv", "comparison.csv", "simulated_events.csv"):
+        assert made[name].read_text().startswith(f"# test_id: hl050\n# recording_sha256: "
+                                                 f"{sha}\n"), name
+        assert read_table(made[name]).attrs == {"test_id": "hl050", "recording_sha256": sha}
     assert json.loads(made["comparison.json"].read_text())["recording_sha256"] == \
         read_dataset(made["rec.nc"]).attrs["recording_sha256"]
 
@@ -159,6 +168,21 @@ def test_report_refuses_an_out_of_date_simulation(made, out, capsys):
                      "--simulated", made["stale/sim.nc"], "-o", out / "r.html"],
             r"stale-sim.nc and .*rec.nc are both of test 'hl050' but of different "
             r"recordings .*make it again")
+
+
+def test_report_refuses_another_tests_tables(made, out, capsys):
+    refused(capsys, ["report", made["rec.nc"], "--fit", made["fit.json"],
+                     "--comparison", made["other/comparison.csv"], "-o", out / "r.html"],
+            r"other/comparison.csv is of test 'hl075'")
+    refused(capsys, ["report", made["rec.nc"], "--fit", made["fit.json"],
+                     "--simulated-events", made["other/simulated_events.csv"],
+                     "-o", out / "r.html"], r"other/simulated_events.csv is of test 'hl075'")
+
+
+def test_compare_refuses_another_tests_waves(made, out, capsys):
+    refused(capsys, ["compare", made["events.nc"], "--simulated", made["sim.nc"],
+                     "--fit", made["fit.json"], "--waves", made["other/events.csv"],
+                     "-o", out / "c.csv"], r"other/events.csv is of test 'hl075'")
 
 
 def test_compare_refuses_another_tests_steps(made, out, capsys):

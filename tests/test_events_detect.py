@@ -161,7 +161,7 @@ def test_command_line_detect_summary_report(tmp_path, capsys):
     assert main(["detect", str(recording), "-o", str(events_csv), "--netcdf",
                  str(events_nc)]) == 0
     assert "32 events (23 partial_slip, 9 gross_slip)" in capsys.readouterr().out
-    table = pd.read_csv(events_csv)
+    table = pd.read_csv(events_csv, comment="#")
     assert list(table.columns) == list(EVENT_COLUMNS) and len(table) == 32
     summary = tmp_path / "summary.csv"
     assert main(["summary", str(events_nc), "-o", str(summary)]) == 0

@@ -23,7 +23,7 @@ def test_the_neighbours_lie_the_fits_load_calibration_apart(tmp_path):
     path = fit_json(tmp_path)
     assert main(["simulate", "--fit", str(path), "-o", str(tmp_path / "s.nc"),
                  "--scatter", str(tmp_path / "scatter.csv")]) == 0
-    scatter = pd.read_csv(tmp_path / "scatter.csv")
+    scatter = pd.read_csv(tmp_path / "scatter.csv", comment="#")
     assert scatter["fs"].tolist() == pytest.approx([0.8 * 0.98, 0.8 * 1.02, 0.8, 0.8])
     assert scatter["fd"].tolist() == pytest.approx([0.6, 0.6, 0.6 * 0.98, 0.6 * 1.02])
     recording = read_dataset(tmp_path / "s.nc")

@@ -71,7 +71,7 @@ def test_full_run_on_default_campaign(workdir):
     for test_id in ids:
         recording = read_dataset(workdir / f"results/{test_id}/recording.nc")
         assert recording.attrs["test_id"] == test_id
-        events = pd.read_csv(workdir / f"results/{test_id}/events.csv")
+        events = pd.read_csv(workdir / f"results/{test_id}/events.csv", comment="#")
         truth = pd.read_csv(workdir / f"raw_data/bench/truth/{test_id}_events.csv")
         visible = truth[truth["visible"]]
         # the default campaign's detection is exact, each test's gross/partial threshold
@@ -89,7 +89,7 @@ def test_full_run_on_default_campaign(workdir):
         assert "<h2>Events</h2>" in page and "<h2>Video</h2>" in page
         assert "<h2>Comparison</h2>" in page and "<h2>Space and time</h2>" in page
         assert (workdir / f"reports/{test_id}.pdf").read_bytes().startswith(b"%PDF")
-        comparison = pd.read_csv(workdir / f"results/{test_id}/comparison.csv")
+        comparison = pd.read_csv(workdir / f"results/{test_id}/comparison.csv", comment="#")
         assert set(comparison["verdict"]) <= {"agrees", "differs", "not compared"}
         assert len(comparison) == 14
         fit = json.loads((workdir / f"results/{test_id}/fit.json").read_text())
@@ -99,7 +99,7 @@ def test_full_run_on_default_campaign(workdir):
             assert (workdir / f"results/logs/{rule}/{test_id}.log").exists()
         kymo = read_dataset(workdir / f"results/{test_id}/kymograph.nc")
         assert kymo.sizes["time"] > 6900 and kymo["x"].attrs["units"] == "mm"
-        fused = pd.read_csv(workdir / f"results/{test_id}/events_video.csv")
+        fused = pd.read_csv(workdir / f"results/{test_id}/events_video.csv", comment="#")
         assert (fused["source"] != "video").sum() == len(events)
         clock = json.loads((workdir / f"results/{test_id}/clock.json").read_text())
         assert clock["pairs"] >= 30

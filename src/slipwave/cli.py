@@ -159,7 +159,7 @@ def _ingest(args: argparse.Namespace) -> None:
 def _detect(args: argparse.Namespace) -> None:
     from slipwave.events import detect_events, events_dataset, segment_phases, wave_counts
     from slipwave.identity import check_same_test, stamp
-    from slipwave.io import atomic_output, read_dataset, write_dataset
+    from slipwave.io import read_dataset, write_dataset, write_table
 
     recording = read_dataset(args.recording, "recording")
     ratio = args.gross_edge_ratio
@@ -178,8 +178,7 @@ def _detect(args: argparse.Namespace) -> None:
     dataset.attrs["source"] = str(args.recording)
     if args.netcdf is not None:
         write_dataset(dataset, args.netcdf)
-    with atomic_output(args.output) as temporary:
-        events.to_csv(temporary, index=False, float_format="%.6g")
+    write_table(events, args.output, dataset.attrs)
     _print_warnings(args.recording, events.attrs)
     counts = ", ".join(f"{n} {kind}" for kind, n in wave_counts(events).items())
     print(f"{args.recording} -> {args.output}: {len(events)} events ({counts})")
@@ -233,23 +232,26 @@ def _compare(args: argparse.Namespace) -> None:
     from slipwave.events import events_table
     from slipwave.fit import read_fit
     from slipwave.identity import check_same_test
-    from slipwave.io import atomic_output, read_dataset, read_table
+    from slipwave.io import atomic_output, read_dataset, read_table, write_table
 
     events_ds = read_dataset(args.events, "events")
     measured = events_table(events_ds)
     fit = read_fit(args.fit)
     simulated = read_dataset(args.simulated, "simulated recording")
     steps = read_dataset(args.steps, "solver steps") if args.steps else None
+    waves = read_table(args.waves) if args.waves is not None else None
+    scatter = read_table(args.scatter) if args.scatter is not None else None
     check_same_test([(args.events, events_ds.attrs), (args.fit, fit),
                      (args.simulated, simulated.attrs)]
-                    + ([] if steps is None else [(args.steps, steps.attrs)]))
+                    + [(path, item.attrs) for path, item in [
+                        (args.steps, steps), (args.waves, waves), (args.scatter, scatter)]
+                       if item is not None])
     detection = _detection_settings(args)
     _check_detection(fit, detection, args.fit)
-    waves = read_table(args.waves) if args.waves is not None else None
     table = compare_test(measured, simulated, steps, waves,
                          min_drop=float(events_ds.attrs.get("min_drop", float("nan")))
                          if "min_drop" in events_ds.attrs else None,
-                         scatter=read_table(args.scatter) if args.scatter else None,
+                         scatter=scatter,
                          detection=detection)
     summary: dict[str, Any] = {"test_id": fit["test_id"],
                                "recording_sha256": fit["recording_sha256"],
@@ -260,14 +262,12 @@ def _compare(args: argparse.Namespace) -> None:
         ratio = setup["height_mm"]["value"] / setup["length_mm"]["value"]
         behaviour_map = read_dataset(args.map, "behaviour map")
         summary["map"] = place_on_map(behaviour_map, ratio, fit["parameters"]["fs"])
-    with atomic_output(args.output) as temporary:
-        table.to_csv(temporary, index=False, float_format="%.6g")
+    write_table(table, args.output, fit)
     if args.json is not None:
         with atomic_output(args.json) as temporary:
             temporary.write_text(json.dumps(summary, indent=2), encoding="utf-8")
     if args.simulated_events is not None:
-        with atomic_output(args.simulated_events) as temporary:
-            table.attrs["simulated_events"].to_csv(temporary, index=False, float_format="%.6g")
+        write_table(table.attrs["simulated_events"], args.simulated_events, fit)
     counts = ", ".join(f"{n} {verdict}" for verdict, n in summary["verdicts"].items())
     print(f"{args.events} vs {args.simulated} -> {args.output}: {counts}")
 
@@ -275,11 +275,10 @@ def _compare(args: argparse.Namespace) -> None:
 def _fits(args: argparse.Namespace) -> None:
     from slipwave.fit import read_fit
     from slipwave.fits import fits_table
-    from slipwave.io import atomic_output
+    from slipwave.io import atomic_output, write_table
 
     table = fits_table([read_fit(path) for path in args.fits])
-    with atomic_output(args.output) as temporary:
-        table.to_csv(temporary, index=False, float_format="%.6g")
+    write_table(table, args.output)
     if args.plot is not None:
         from slipwave.plot import plot_fits
         with atomic_output(args.plot) as temporary:
@@ -292,7 +291,7 @@ def _summary(args: argparse.Namespace) -> None:
     import pandas as pd
 
     from slipwave.events import summary_row
-    from slipwave.io import atomic_output, read_dataset
+    from slipwave.io import read_dataset, write_table
 
     rows: list[dict[str, object]] = []
     for path in args.events:
@@ -301,8 +300,7 @@ def _summary(args: argparse.Namespace) -> None:
         if any(row["test_id"] == test_id for row in rows):
             raise SlipwaveError(f"{path}: test {test_id!r} again: each test's events once")
         rows.append(summary_row(test_id, dataset))
-    with atomic_output(args.output) as temporary:
-        pd.DataFrame(rows).to_csv(temporary, index=False, float_format="%.6g")
+    write_table(pd.DataFrame(rows), args.output)
     print(f"{len(rows)} tests -> {args.output}")
 
 
@@ -328,7 +326,7 @@ def _kymograph(args: argparse.Namespace) -> None:
 def _waves(args: argparse.Namespace) -> None:
     from slipwave.events import events_table
     from slipwave.identity import check_same_test
-    from slipwave.io import atomic_output, read_dataset
+    from slipwave.io import atomic_output, read_dataset, write_table
     from slipwave.video import align_clocks, fuse, on_card_clock, track_waves
 
     kymo = read_dataset(args.kymograph, "kymograph")
@@ -339,10 +337,8 @@ def _waves(args: argparse.Namespace) -> None:
     waves = track_waves(kymo)
     clock = align_clocks(waves, kymo, recording, events)
     waves = on_card_clock(waves, clock)
-    with atomic_output(args.output) as temporary:
-        waves.to_csv(temporary, index=False, float_format="%.6g")
-    with atomic_output(args.fused) as temporary:
-        fuse(events, waves, clock).to_csv(temporary, index=False, float_format="%.6g")
+    write_table(waves, args.output, recording.attrs)
+    write_table(fuse(events, waves, clock), args.fused, recording.attrs)
     with atomic_output(args.clock) as temporary:
         temporary.write_text(clock.to_json())
     print(f"{args.kymograph} -> {args.output}: {len(waves)} waves; camera clock: "
@@ -365,32 +361,34 @@ def _report(args: argparse.Namespace) -> None:
                  else read_dataset(args.simulated, "simulated recording"))
     contact = None if args.contact is None else read_dataset(args.contact, "contact history")
     compared = {} if args.comparison_json is None else read_comparison(args.comparison_json)
+    tables = {option: None if path is None else read_table(path) for option, path in [
+        ("waves", args.waves), ("fused", args.fused), ("comparison", args.comparison),
+        ("simulated_events", args.simulated_events)]}
     check_same_test([(args.recording, recording.attrs)] + [
         (path, content) for path, content in [
             (args.events, None if events is None else events.attrs), (args.fit, fit),
             (args.simulated, None if simulated is None else simulated.attrs),
             (args.contact, None if contact is None else contact.attrs),
-            (args.comparison_json, compared or None)] if content is not None])
+            (args.comparison_json, compared or None),
+            *[(getattr(args, option), None if table is None else table.attrs)
+              for option, table in tables.items()]] if content is not None])
     video = None
     kymo = clock = None
     if args.kymograph is not None:
-        if args.waves is None or args.clock is None:
+        if tables["waves"] is None or args.clock is None:
             raise SlipwaveError("--kymograph needs --waves and --clock")
-        fused = None if args.fused is None else read_table(args.fused)
         kymo = read_dataset(args.kymograph, "kymograph")
         clock = read_clock(args.clock)
-        video = video_summary(kymo, read_table(args.waves), clock, args.frames, events, fused)
+        video = video_summary(kymo, tables["waves"], clock, args.frames, events,
+                              tables["fused"])
     pairing = None
     if fit is not None or simulated is not None:
         behaviour_map = None if args.map is None else read_dataset(args.map, "behaviour map")
         pairing = pairing_summary(
-            recording, events, fit=fit,
-            comparison=None if args.comparison is None else read_table(args.comparison),
-            simulated=simulated,
-            simulated_events=(None if args.simulated_events is None
-                              else read_table(args.simulated_events)),
-            contact=contact, placement=compared.get("map"), behaviour_map=behaviour_map,
-            kymo=kymo, clock=clock)
+            recording, events, fit=fit, comparison=tables["comparison"], simulated=simulated,
+            simulated_events=tables["simulated_events"], contact=contact,
+            placement=compared.get("map"), behaviour_map=behaviour_map, kymo=kymo,
+            clock=clock)
     write_test_page(recording, args.output, events, video, pairing, pdf=args.pdf,
                     workers=args.threads)
     print(f"{args.recording} -> {args.output}" + (f", {args.pdf}" if args.pdf else ""))
@@ -492,7 +490,7 @@ def _check_detection(fit: Mapping[str, Any], detection: DetectionSettings,
 def _simulate_test(args: argparse.Namespace) -> None:
     from slipwave.fit import chosen_law, read_fit
     from slipwave.identity import stamp
-    from slipwave.io import atomic_output, write_dataset
+    from slipwave.io import write_dataset, write_table
     from slipwave.resources import require_memory
     from slipwave.setup import TestSetup
     from slipwave.simulate import replay_test, sequence_scatter
@@ -527,8 +525,7 @@ def _simulate_test(args: argparse.Namespace) -> None:
                                    gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"],
                                    step=float(fit["load_calibration"]), detection=detection,
                                    cache=cache)
-        with atomic_output(args.scatter) as temporary:
-            scatter.to_csv(temporary, index=False, float_format="%.6g")
+        write_table(scatter, args.scatter, fit)
     print(f"{args.fit} -> {args.output}: {fit['chosen']} "
           f"{', '.join(f'{k} {v:.4g}' for k, v in fit['parameters'].items())}, "
           f"{replay.simulation.sizes['step']} steps, gross/partial edge threshold "
@@ -566,13 +563,12 @@ def _map_row(args: argparse.Namespace) -> None:
 
 
 def _map_assemble(args: argparse.Namespace) -> None:
-    from slipwave.io import atomic_output, read_dataset, write_dataset
+    from slipwave.io import atomic_output, read_dataset, write_dataset, write_table
     from slipwave.map import assemble_map, behaviour_legend, map_table
 
     whole = assemble_map([read_dataset(path, "map row") for path in args.rows])
     write_dataset(whole, args.output)
-    with atomic_output(args.csv) as temporary:
-        map_table(whole).to_csv(temporary, index=False, float_format="%.6g")
+    write_table(map_table(whole), args.csv)
     with atomic_output(args.legend) as temporary:
         temporary.write_text(behaviour_legend(whole) + "\n")
     failed = int((whole["end"].values != "gross sliding").sum())
