@@ -446,8 +446,14 @@ def _check_config(args: argparse.Namespace) -> None:
 def _simulate(args: argparse.Namespace) -> None:
     from slipwave.io import write_dataset
     from slipwave.resources import require_memory
-    from slipwave.solver import Coulomb, LoadPath, Slab, describe_behaviour, simulate
-    from slipwave.solver.slab import condensation_memory
+    from slipwave.solver import (
+        Coulomb,
+        LoadPath,
+        Slab,
+        describe_behaviour,
+        simulate,
+        simulation_memory,
+    )
 
     if args.fit is not None:
         _simulate_test(args)
@@ -461,7 +467,7 @@ def _simulate(args: argparse.Namespace) -> None:
                     normal_control=args.normal_control, max_travel=args.max_travel,
                     travel_step=args.travel_step, machine_stiffness=args.machine_stiffness,
                     normal_friction=args.normal_friction == "on")
-    require_memory(condensation_memory(slab), f"simulating a slab of {args.elements} elements "
+    require_memory(simulation_memory(slab, path), f"simulating a slab of {args.elements} elements "
                    f"and H = {args.height:g} mm", limit_gb=args.memory_limit)
     result = simulate(slab, Coulomb(fs=args.fs, fd=args.fd), path, cache=_solver_cache(args))
     behaviour = describe_behaviour(result)
@@ -538,16 +544,15 @@ def _map_row(args: argparse.Namespace) -> None:
     from slipwave.io import write_dataset
     from slipwave.map import friction_grid, map_row, shard
     from slipwave.resources import require_memory
-    from slipwave.solver import LoadPath, Slab
-    from slipwave.solver.slab import condensation_memory
+    from slipwave.solver import LoadPath, Slab, simulation_memory
 
     frictions = shard(friction_grid(*args.frictions), args.shard, args.shard_size)
     slab = Slab(height=args.height_ratio * default.CONTACT_LENGTH_MM, elements=args.elements)
-    require_memory(condensation_memory(slab), f"the map's row at H/L {args.height_ratio:g} "
-                   f"({args.elements} elements)", limit_gb=args.memory_limit)
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
                     normal_control=args.normal_control,
                     normal_friction=args.normal_friction == "on")
+    require_memory(simulation_memory(slab, path), f"the map's row at H/L {args.height_ratio:g} "
+                   f"({args.elements} elements)", limit_gb=args.memory_limit)
     with tqdm(total=frictions.size, desc=f"H/L {args.height_ratio:g}", unit="case",
               mininterval=2.0, file=sys.stderr) as bar:
         row = map_row(args.height_ratio, frictions, elements=args.elements, path=path,

@@ -21,8 +21,7 @@ import xarray as xr
 
 from slipwave.defaults import TRAVEL_STEP_MM
 from slipwave.errors import SlipwaveError, SolverError
-from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, simulate
-from slipwave.solver.slab import condensation_memory
+from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, simulate, simulation_memory
 from slipwave.validation import setup_value_problem
 
 GEOMETRY = {
@@ -147,9 +146,8 @@ class TestSetup:
     def simulation_memory(self, elements: int, sample_rate: float) -> int:
         """Bytes a simulation of the test takes at its peak, estimated before it starts.
 
-        The slab's condensation (:func:`~slipwave.solver.slab.condensation_memory`),
-        the solver's steps (a few dozen arrays over the contact's nodes each), and the
-        sampled recording with its working copies.
+        :func:`slipwave.solver.simulation_memory` of its slab, load path and
+        recording.
 
         Parameters
         ----------
@@ -164,13 +162,8 @@ class TestSetup:
             The estimate, bytes (the measured peak is below it).
 
         """
-        slab = self.slab(elements)
-        path = self.load_path()
-        steps = path.normal_steps + (path.max_travel or 0.0) / (path.travel_step or 1.0)
-        nodes = elements + 1
-        samples = self["duration_s"] * sample_rate
-        total = condensation_memory(slab) + steps * nodes * 8 * 48 + samples * 8 * 8 * 4
-        return int(min(total, 2.0**62))
+        return simulation_memory(self.slab(elements), self.load_path(),
+                                 samples=self["duration_s"] * sample_rate)
 
     def load_path(self) -> LoadPath:
         """The test's load path: N held, the flat driven through the machine's spring.

@@ -42,9 +42,16 @@ from slipwave.io import atomic_output, write_acquisition
 from slipwave.photoelastic import Camera, Photoelastic
 from slipwave.resources import require_memory
 from slipwave.setup import TestSetup, driven_load_path
-from slipwave.solver import Coulomb, LoadPath, Slab, SlipWeakening, SolverCache, simulate
+from slipwave.solver import (
+    Coulomb,
+    LoadPath,
+    Slab,
+    SlipWeakening,
+    SolverCache,
+    simulate,
+    simulation_memory,
+)
 from slipwave.solver.signals import clean_signals, step_progress, wave_windows
-from slipwave.solver.slab import condensation_memory
 from slipwave.validation import check, load_schema, read_yaml
 
 LED_DURATION = 0.2  # s the sync LED stays lit
@@ -221,7 +228,9 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     ('demo', 4000)
     """
     slab = spec.slab()
-    require_memory(condensation_memory(slab, recovery=spec.video != "none"),
+    require_memory(simulation_memory(slab, spec.load_path(),
+                                     samples=spec.duration * spec.sample_rate,
+                                     recovery=spec.video != "none"),
                    f"the virtual test {spec.test_id!r} ({spec.elements} elements, H = "
                    f"{spec.height:g} mm)", limit_gb=memory_limit_gb)
     simulation = simulate(slab, spec.friction(), spec.load_path(), cache=cache)

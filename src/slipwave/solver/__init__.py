@@ -13,7 +13,13 @@ by increment along the bench's load path.
 from slipwave.solver.behaviour import Behaviour, describe_behaviour
 from slipwave.solver.cache import SolverCache
 from slipwave.solver.contact import Body, Control
-from slipwave.solver.simulate import Coulomb, LoadPath, SlipWeakening, simulate
+from slipwave.solver.simulate import (
+    Coulomb,
+    LoadPath,
+    SlipWeakening,
+    simulate,
+    simulation_memory,
+)
 from slipwave.solver.slab import Condensed, Slab, condense
 
 __all__ = [
@@ -29,4 +35,5 @@ __all__ = [
     "condense",
     "describe_behaviour",
     "simulate",
+    "simulation_memory",
 ]

@@ -19,7 +19,7 @@ from slipwave.defaults import (
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.solver.cache import SolverCache
 from slipwave.solver.contact import OPEN, STICK, Body, Control, Increment, NotConverged
-from slipwave.solver.slab import Condensed, Slab, condense, geometry_key
+from slipwave.solver.slab import Condensed, Slab, condensation_memory, condense, geometry_key
 
 RESIDUAL_TOLERANCE = 1e-8
 """Largest relative complementarity residual of a returned step."""
@@ -379,6 +379,48 @@ class _Run:
     @property
     def gross(self) -> bool:
         return bool(self.steps) and self.steps[-1]["wave"] == "gross"
+
+
+def simulation_memory(slab: Slab, path: LoadPath, *, samples: float = 0.0,
+                      recovery: bool = False) -> int:
+    """Bytes a simulation takes at its peak, estimated before it starts.
+
+    The slab's condensation (:func:`~slipwave.solver.slab.condensation_memory`), the
+    steps (a few dozen arrays over the contact's nodes each; a load-controlled path
+    takes about three times N / ``tangential_step`` of them) and the signals sampled
+    from them with their working copies. Every command checks it with
+    :func:`slipwave.resources.require_memory` before it simulates.
+
+    Parameters
+    ----------
+    slab, path
+        The simulation's.
+    samples
+        Samples of the recording drawn from it (duration times rate).
+    recovery
+        Whether the displacement recovery of the virtual bench's camera is built.
+
+    Returns
+    -------
+    int
+        The estimate, bytes (the measured peaks lie below it).
+
+    Examples
+    --------
+    >>> path = LoadPath(machine_stiffness=40.0, max_travel=14.0, travel_step=0.03)
+    >>> small = simulation_memory(Slab(elements=80), path, samples=28_000)
+    >>> big = simulation_memory(Slab(elements=80), path, samples=2.8e9)
+    >>> small < 100e6 < 500e9 < big
+    True
+    """
+    if path.max_travel is not None and path.travel_step is not None:
+        steps = path.max_travel / path.travel_step
+    else:
+        steps = 3.0 * path.normal_load / path.tangential_step
+    steps = path.normal_steps + min(steps, path.max_steps)
+    nodes = slab.elements + 1
+    total = condensation_memory(slab, recovery=recovery) + steps * nodes * 8 * 48 + samples * 256
+    return int(min(total, 2.0**62))
 
 
 def simulate(
