@@ -1,4 +1,4 @@
-"""Fuzzing of the acquisition-CSV reader and the campaign table, at scale.
+"""Fuzzing of the acquisition-CSV reader, the campaign table and fit.json, at scale.
 
 Every generated file must either be read or raise SlipwaveError: any other
 exception escaping is a defect (hypothesis then prints the smallest such file).
@@ -21,9 +21,17 @@ from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
 
-from fuzzing import csv_like_text, mutated_csv, mutated_table, table_like_text
+from fuzzing import (
+    csv_like_text,
+    mutated_csv,
+    mutated_fit,
+    mutated_table,
+    table_like_text,
+    use_fit,
+)
 from slipwave.campaign import check_campaign, read_campaign
 from slipwave.errors import SlipwaveError
+from slipwave.fit import read_fit
 from slipwave.io import read_acquisition
 from targets import check, finish
 
@@ -35,8 +43,8 @@ CONFIG = {"detection": {"gross_edge_ratio": 0.9}, "column_maps": {"labview_en": 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--examples", type=int, default=2200,
-                        help="cases per strategy (five strategies)")
+    parser.add_argument("--examples", type=int, default=1900,
+                        help="cases per strategy (six strategies)")
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp(prefix="slipwave-fuzz-"))
     counts = {"read": 0, "refused": 0}
@@ -60,6 +68,17 @@ def main() -> None:
         except SlipwaveError:
             counts["refused"] += 1
 
+    def read_fit_json(content: object) -> None:
+        path = folder / "fit.json"
+        path.write_text(json.dumps(content))
+        try:
+            fit = read_fit(path)
+        except SlipwaveError:
+            counts["refused"] += 1
+            return
+        use_fit(fit)  # what the reader accepts, the stages can use
+        counts["read"] += 1
+
     fuzz = settings(max_examples=args.examples, deadline=None, database=None,
                     suppress_health_check=list(HealthCheck))
     runs = {
@@ -68,6 +87,7 @@ def main() -> None:
         "CSV, mutated valid files": (read_csv, mutated_csv()),
         "campaign table, table-like text": (read_table, table_like_text.map(str.encode)),
         "campaign table, mutated valid tables": (read_table, mutated_table()),
+        "fit.json, mutated valid fits": (read_fit_json, mutated_fit()),
     }
     # a warning leaving the reader is an unhandled case too (pandas warns where it truncates)
     warnings.simplefilter("error")

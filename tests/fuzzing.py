@@ -137,3 +137,18 @@ def mutated_fit(draw: st.DrawFn) -> object:
         else:
             parent[last] = draw(JSON_VALUES)  # type: ignore[index]
     return fit
+
+
+def use_fit(fit: dict) -> None:
+    """Use a fit as the stages do: its law, setup, slab, load path, detection and table."""
+    from slipwave.events import DetectionSettings
+    from slipwave.fit import chosen_law
+    from slipwave.fits import fits_table
+    from slipwave.setup import TestSetup
+
+    chosen_law(fit)
+    setup = TestSetup.from_dict(fit["setup"])
+    setup.slab(int(fit["elements"]))
+    setup.load_path()
+    DetectionSettings.from_dict(fit["detection"])
+    assert len(fits_table([fit])) == 1

@@ -21,15 +21,13 @@ from fuzzing import (
     mutated_fit,
     mutated_table,
     table_like_text,
+    use_fit,
     valid_fit,
 )
 from slipwave.campaign import check_campaign, read_campaign
 from slipwave.errors import SlipwaveError
-from slipwave.events import DetectionSettings
-from slipwave.fit import chosen_law, read_fit
-from slipwave.fits import fits_table
+from slipwave.fit import read_fit
 from slipwave.io import read_acquisition
-from slipwave.setup import TestSetup
 
 TABLE_SCHEMA = json.loads(
     (Path(__file__).parents[1] / "src/slipwave/schemas/tests.schema.json").read_text())
@@ -96,13 +94,7 @@ def read_fit_or_fail(content: bytes) -> None:
         fit = read_fit(path)
     except SlipwaveError:
         return
-    # what the reader accepts, the stages can use: law, setup, slab, detection, table
-    chosen_law(fit)
-    setup = TestSetup.from_dict(fit["setup"])
-    setup.slab(int(fit["elements"]))
-    setup.load_path()
-    DetectionSettings.from_dict(fit["detection"])
-    assert len(fits_table([fit])) == 1
+    use_fit(fit)  # what the reader accepts, the stages can use
 
 
 def test_the_valid_fit_is_read():
