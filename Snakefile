@@ -59,9 +59,10 @@ wildcard_constraints:
 
 
 # A job killed outright (out of memory, SIGKILL) leaves its half-written output's
-# hidden .part file: removed when the workflow starts and when a job fails.
+# hidden .part file: removed when the workflow starts (no job of it runs then; the
+# working directory is Snakemake's lock) and, those of dead writers, when a job fails.
 onstart:
-    remove_stale_parts(["results", "reports"])
+    remove_stale_parts(["results", "reports"], nothing_runs=True)
 
 
 onerror:

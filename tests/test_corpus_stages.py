@@ -606,13 +606,18 @@ def test_a_damaged_or_foreign_cache_file_is_rebuilt(tmp_path, capsys):
 
 
 def test_the_part_of_a_killed_writer_is_removed(tmp_path):
-    dead = tmp_path / "reports" / ".hl050.html.999999999-0a1b2c.part"
-    dead.parent.mkdir()
-    dead.write_text("")
-    alive = tmp_path / "reports" / f".hl075.html.{os.getpid()}-0a1b2c.part"
-    alive.write_text("")
-    assert remove_stale_parts([tmp_path / "reports", tmp_path / "missing"]) == [dead]
-    assert alive.exists() and not dead.exists()
+    from slipwave.io.atomic import _host
+
+    folder = tmp_path / "reports"
+    folder.mkdir()
+    dead = folder / f".hl050.html.{_host()}-999999999-0a1b2c.part"
+    alive = folder / f".hl075.html.{_host()}-{os.getpid()}-0a1b2c.part"
+    elsewhere = folder / ".hl025.html.node17-4242-0a1b2c.part"  # a cluster node's job
+    for part in (dead, alive, elsewhere):
+        part.write_text("")
+    assert remove_stale_parts([folder, tmp_path / "missing"]) == [dead]
+    assert alive.exists() and elsewhere.exists() and not dead.exists()
+    assert sorted(remove_stale_parts([folder], nothing_runs=True)) == sorted([alive, elsewhere])
 
 
 def test_a_killed_report_leaves_nothing_after_the_workflow_starts(made, tmp_path):

@@ -6,6 +6,7 @@ import contextlib
 import glob
 import os
 import secrets
+import socket
 from collections.abc import Iterable, Iterator
 from os import PathLike
 from pathlib import Path
@@ -14,18 +15,30 @@ _UMASK = os.umask(0)
 os.umask(_UMASK)
 
 
+def _host() -> str:
+    """The machine's name, as a ``.part`` file's name holds it (no dot, no dash)."""
+    return socket.gethostname().replace(".", "_").replace("-", "_") or "host"
+
+
 def _part_name(target: Path) -> Path:
-    """A ``.NAME.<pid>-<random>.part`` beside ``target``, naming the process writing it."""
-    return target.parent / f".{target.name}.{os.getpid()}-{secrets.token_hex(6)}.part"
+    """A ``.NAME.<host>-<pid>-<random>.part`` beside ``target``: who writes it."""
+    return target.parent / (f".{target.name}.{_host()}-{os.getpid()}-"
+                            f"{secrets.token_hex(6)}.part")
 
 
 def _writer_alive(part: Path) -> bool:
-    """Whether the process that named ``part`` still runs (a name without one: no)."""
-    pid = part.name.rsplit(".", 2)[-2].split("-")[0]
-    if not pid.isdigit():
+    """Whether the process that named ``part`` may still run.
+
+    One on another machine (a cluster's node) may: it is not known here. A name
+    without a writer is a dead one's.
+    """
+    writer = part.name.rsplit(".", 2)[-2].rsplit("-", 2)
+    if len(writer) != 3 or not writer[1].isdigit():
         return False
+    if writer[0] != _host():
+        return True
     try:
-        os.kill(int(pid), 0)
+        os.kill(int(writer[1]), 0)
     except ProcessLookupError:
         return False
     except PermissionError:  # another user's process
@@ -33,17 +46,22 @@ def _writer_alive(part: Path) -> bool:
     return True
 
 
-def remove_stale_parts(folders: Iterable[str | PathLike[str]]) -> list[Path]:
+def remove_stale_parts(folders: Iterable[str | PathLike[str]], *,
+                       nothing_runs: bool = False) -> list[Path]:
     """Remove the ``.part`` files that killed writers left under ``folders``.
 
     A process killed outright (SIGKILL, the out-of-memory killer) cannot remove the
     temporary file of :func:`atomic_output`; the workflow calls this when it starts
-    and when a job fails. Files of writers still running are kept.
+    (when nothing of it runs) and when a job fails. Otherwise the files of writers
+    that may still run are kept: this machine's running processes, and any on
+    another machine.
 
     Parameters
     ----------
     folders
         Searched recursively; missing ones are skipped.
+    nothing_runs
+        Whether the caller knows that no writer runs (every ``.part`` is then stale).
 
     Returns
     -------
@@ -54,7 +72,7 @@ def remove_stale_parts(folders: Iterable[str | PathLike[str]]) -> list[Path]:
     removed = []
     for folder in folders:
         for part in Path(folder).rglob(".*.part"):
-            if part.is_file() and not _writer_alive(part):
+            if part.is_file() and (nothing_runs or not _writer_alive(part)):
                 part.unlink(missing_ok=True)
                 removed.append(part)
     return removed
@@ -67,7 +85,7 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     The destination is written whole or not at all: a failure leaves any
     previous file untouched and no partial file behind. A process killed
     while writing (SIGKILL; the ``slipwave`` command turns SIGTERM into a
-    clean exit) leaves its ``.NAME.<pid>-<random>.part`` file: the next write of
+    clean exit) leaves its ``.NAME.<host>-<pid>-<random>.part`` file: the next write of
     the same output removes it, and so does :func:`remove_stale_parts`. Two
     processes writing the same output at once are not supported (a workflow never
     does that).
