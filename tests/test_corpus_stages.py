@@ -215,6 +215,15 @@ def test_waves_refuses_another_tests_events(made, out, tmp_path, capsys):
             r"other/events.nc is of test 'hl075'")
 
 
+def test_waves_refuses_another_tests_video(made, out, tmp_path, capsys):
+    kymograph = tmp_path / "k.nc"
+    write_dataset(xr.Dataset(attrs={"product": "kymograph", "test_id": "hl075"}), kymograph)
+    refused(capsys, ["waves", kymograph, "--recording", made["rec.nc"],
+                     "--events", made["events.nc"], "-o", out / "w.csv",
+                     "--fused", out / "f.csv", "--clock", out / "c.json"],
+            r"k.nc is of test 'hl075', .*rec.nc of test 'hl050'")
+
+
 def test_summary_refuses_a_test_twice(made, out, capsys):
     refused(capsys, ["summary", made["events.nc"], made["events.nc"], "-o", out / "s.csv"],
             r"events.nc: test 'hl050' again")

@@ -317,6 +317,8 @@ def _kymograph(args: argparse.Namespace) -> None:
     kymo = kymograph(source, geometry, band_mm=_band(args.band))
     kymo.attrs["source"] = str(args.frames)
     kymo.attrs["warnings"] = "\n".join(source.warnings)
+    if args.test_id is not None:
+        kymo.attrs["test_id"] = args.test_id
     write_dataset(kymo, args.output)
     _print_warnings(args.frames, kymo.attrs)
     print(f"{args.frames} -> {args.output}: {kymo.sizes['time']} frames, contact at columns "
@@ -333,6 +335,11 @@ def _waves(args: argparse.Namespace) -> None:
     recording = read_dataset(args.recording, "recording")
     events_ds = read_dataset(args.events, "events")
     check_same_test([(args.recording, recording.attrs), (args.events, events_ds.attrs)])
+    filmed = str(kymo.attrs.get("test_id", "") or "")  # a video names no recording
+    if filmed and filmed != recording.attrs["test_id"]:
+        raise SlipwaveError(f"{args.kymograph} is of test {filmed!r}, {args.recording} of test "
+                            f"{recording.attrs['test_id']!r}: files of different tests cannot "
+                            "be combined")
     events = events_table(events_ds)
     waves = track_waves(kymo)
     clock = align_clocks(waves, kymo, recording, events)
@@ -973,6 +980,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     kymo.add_argument("frames", type=Path, help="video file, image folder or TIFF stack")
     kymo.add_argument("-o", "--output", type=Path, required=True, help="netCDF to write")
+    kymo.add_argument("--test-id", default=None,
+                      help="the test the video is of ('slipwave waves' then pairs it with that "
+                      "test's recording only)")
     kymo.add_argument("--length", type=_setting("video", "length_mm"),
                       default=default.CONTACT_LENGTH_MM,
                       help="contact length, mm (%(default)s)")

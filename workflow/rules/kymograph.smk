@@ -17,5 +17,6 @@ rule kymograph:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave kymograph {input.frames:q} -o {output:q} --length {params.length} "
-        "--band {params.band[0]} {params.band[1]} {params.fps} > {log:q} 2>&1"
+        "slipwave kymograph {input.frames:q} -o {output:q} --test-id {wildcards.test_id:q} "
+        "--length {params.length} --band {params.band[0]} {params.band[1]} {params.fps} "
+        "> {log:q} 2>&1"
