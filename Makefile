@@ -41,10 +41,10 @@ lint: $(STAMP)
 	$(BIN)/mypy
 	$(BIN)/lint-imports
 
-# The documentation site in docs/_build/html, warnings as errors; the doctest builder
-# runs the tutorial (the default campaign through the library).
+# The documentation site in docs/_build/html (read on two processes), warnings as errors;
+# the doctest builder runs the tutorial (the default campaign through the library).
 docs: $(STAMP)
-	$(BIN)/sphinx-build -q -W --keep-going -b html docs docs/_build/html
+	$(BIN)/sphinx-build -q -W --keep-going -j 2 -b html docs docs/_build/html
 	$(BIN)/sphinx-build -q -W -b doctest docs docs/_build/doctest
 
 # Two pytest workers (pytest-xdist), a test file to each: a file's module fixtures (the

@@ -688,13 +688,23 @@ def _workflow(folder: Path, table: str, config: str = "tests: t.tsv\n",
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(WORKFLOW_CASES))
-def test_a_bad_campaign_table_stops_before_any_job(tmp_path, name):
-    table, expected = WORKFLOW_CASES[name]
+def test_a_bad_campaign_table_stops_the_workflow_before_any_job(tmp_path):
+    table, expected = WORKFLOW_CASES["id-campaign"]
     run = _workflow(tmp_path, table, "tests: t.tsv\n", "-n")
     output = run.stdout + run.stderr
     assert run.returncode != 0 and re.search(expected, output), output
     assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("name", list(WORKFLOW_CASES))
+def test_a_bad_campaign_table_is_refused_naming_its_line(tmp_path, capsys, name):
+    # the Snakefile's own checks (above), run by check-config without Snakemake
+    table, expected = WORKFLOW_CASES[name]
+    (tmp_path / "t.tsv").write_text(table)
+    config = tmp_path / "c.yaml"
+    config.write_text(f"tests: {tmp_path / 't.tsv'}\n")
+    refused(capsys, ["check-config", config, "--workflow-config", ROOT / "config/config.yaml"],
+            expected)
 
 
 @pytest.mark.slow

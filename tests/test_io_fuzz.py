@@ -47,19 +47,19 @@ def read_or_fail(content: bytes) -> None:
     assert all(result[name].shape == time.shape for name in result.data_vars)
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.binary(max_size=400))
 def test_random_bytes(content):
     read_or_fail(content)
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(csv_like_text)
 def test_random_csv_like_text(text):
     read_or_fail(text.encode("utf-8"))
 
 
-@settings(max_examples=500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(mutated_csv())
 def test_mutated_files(content):
     read_or_fail(content)
@@ -75,13 +75,13 @@ def read_table_or_fail(content: bytes) -> None:
         return
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(mutated_table())
 def test_mutated_campaign_tables(content):
     read_table_or_fail(content)
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(table_like_text)
 def test_random_campaign_tables(text):
     read_table_or_fail(text.encode("utf-8"))
@@ -103,13 +103,13 @@ def test_the_valid_fit_is_read():
     assert read_fit(path)["chosen"] == "coulomb"
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(mutated_fit())
 def test_mutated_fit_json(content):
     read_fit_or_fail(json.dumps(content).encode("utf-8"))
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_damaged_fit_json_text(data):
     text = json.dumps(valid_fit(), indent=2).encode("utf-8")
