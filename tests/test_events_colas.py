@@ -93,14 +93,14 @@ def test_the_reference_detector_gives_the_authors_events(reference_slips):
     published = pd.read_csv(DATA / "reference" / "k168Nm_v42_events.csv")
     starts = published["start_index"].to_numpy() - 1  # 1-based in MATLAB
     gaps = np.abs(events[:, 0][None, :] - starts[:, None]).min(axis=1)
-    assert len(events) == pytest.approx(len(published), abs=3)
+    assert len(events) == pytest.approx(len(published), abs=1)
     assert (gaps <= 0.05 * colas_reference.RATE).all()
-    assert np.median(gaps) <= 25
+    assert np.median(gaps) <= 2
     stops = published["stop_index"].to_numpy()
     stops = np.where(np.isnan(stops), force.size, stops).astype(int) - 1
     published_significant = colas_reference.significant(force, np.column_stack([starts, stops]))
     assert published_significant.sum() == 215  # as the data's README says
-    assert colas_reference.significant(force, events).sum() == pytest.approx(215, abs=3)
+    assert colas_reference.significant(force, events).sum() == pytest.approx(215, abs=1)
 
 
 @pytest.mark.slow
