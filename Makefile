@@ -50,9 +50,11 @@ docs: $(STAMP)
 # Two pytest workers (pytest-xdist), a test file to each: a file's module fixtures (the
 # default campaign simulated, the Colas records denoised) are built once. One BLAS
 # thread per worker: two workers with two threads each on two cores run slower than one.
+# Files go out in collection order (tests/conftest.py puts the longest first; xdist would
+# otherwise send the files with the most tests first, and the workflow's run last).
 test: lint docs
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-		$(BIN)/python -m pytest -n 2 --dist loadfile
+		$(BIN)/python -m pytest -n 2 --dist loadfile --no-loadscope-reorder
 
 # The unit tests and doctests alone (no whole virtual-bench test, no workflow run).
 test-fast: $(STAMP)

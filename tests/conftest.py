@@ -33,8 +33,8 @@ def write(tmp_path: Path) -> Callable[..., Path]:
     return _write
 
 
-# The files whose module fixtures take longest go first: `make test`'s two workers take
-# whole files in collection order, and the longest started last would end alone.
+# The files that take longest go first: `make test`'s two workers take whole files in
+# collection order (--no-loadscope-reorder), and the longest started last would end alone.
 LONGEST_FIRST = ("test_workflow.py", "test_events_colas.py", "test_events_accuracy.py",
                  "test_video_waves.py")
 
