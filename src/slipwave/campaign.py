@@ -297,7 +297,7 @@ def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
 
 def check_config_files(paths: Iterable[str | PathLike[str]],
                        schema: Mapping[str, Any] | None = None, *,
-                       command_line: Iterable[str | PathLike[str]] = ()) -> None:
+                       command_line: Iterable[str | PathLike[str]] = ()) -> dict[str, Any]:
     """Check the workflow's config files one by one, before Snakemake merges them.
 
     Each file's own settings are checked against the config schema, so that an
@@ -314,27 +314,45 @@ def check_config_files(paths: Iterable[str | PathLike[str]],
     command_line
         The ``--configfile`` files (Snakemake's ``workflow.overwrite_configfiles``).
 
+    Returns
+    -------
+    dict
+        The files' settings merged in order, mapping by mapping, as Snakemake merges
+        them (without the schema's defaults).
+
     Raises
     ------
     ConfigError
         Naming the file, the line, the setting and what is wrong.
 
     """
-    if schema is not None:
-        settings = {key: value for key, value in schema.items() if key != "required"}
-        for path in paths:
-            content, line_of = read_yaml(path)
+    settings = None if schema is None else {key: value for key, value in schema.items()
+                                            if key != "required"}
+    contents = {}
+    for path in paths:
+        content, line_of = read_yaml(path)
+        contents[Path(path)] = content
+        if settings is not None:
             check(content or {}, settings, source=str(path), line_of=line_of)
     given = [Path(p) for p in command_line]
-    if not given:
-        return
-    for path in given:
-        content, _ = read_yaml(path)
-        if isinstance(content, Mapping) and content.get("tests"):
-            return
-    names = ", ".join(map(str, given))
-    raise ConfigError(f"{names}: no 'tests' entry naming the campaign table; without it the "
-                      "default campaign (config/config.yaml) would run instead")
+    if given and not any(isinstance(contents.get(path), Mapping)
+                         and contents[path].get("tests") for path in given):
+        names = ", ".join(map(str, given))
+        raise ConfigError(f"{names}: no 'tests' entry naming the campaign table; without it "
+                          "the default campaign (config/config.yaml) would run instead")
+    merged: dict[str, Any] = {}
+    for content in contents.values():
+        _merge(merged, content or {})
+    return merged
+
+
+def _merge(into: dict[str, Any], update: Mapping[str, Any]) -> None:
+    """Merge ``update`` into ``into``, mapping by mapping (Snakemake's update_config)."""
+    for key, value in update.items():
+        if isinstance(value, Mapping) and isinstance(into.get(key), dict):
+            _merge(into[key], value)
+        else:
+            into[key] = dict(value) if isinstance(value, Mapping) else value
 
 
 def height_ratio_pairs(campaign: pd.DataFrame) -> list[str]:

@@ -335,11 +335,9 @@ def _waves(args: argparse.Namespace) -> None:
     recording = read_dataset(args.recording, "recording")
     events_ds = read_dataset(args.events, "events")
     check_same_test([(args.recording, recording.attrs), (args.events, events_ds.attrs)])
-    filmed = str(kymo.attrs.get("test_id", "") or "")  # a video names no recording
-    if filmed and filmed != recording.attrs["test_id"]:
-        raise SlipwaveError(f"{args.kymograph} is of test {filmed!r}, {args.recording} of test "
-                            f"{recording.attrs['test_id']!r}: files of different tests cannot "
-                            "be combined")
+    if kymo.attrs.get("test_id"):  # a video names its test, not a recording
+        check_same_test([(args.recording, recording.attrs), (args.kymograph, kymo.attrs)],
+                        keys=("test_id",))
     events = events_table(events_ds)
     waves = track_waves(kymo)
     clock = align_clocks(waves, kymo, recording, events)
@@ -427,23 +425,12 @@ def _campaign_report(args: argparse.Namespace) -> None:
 
 def _check_config(args: argparse.Namespace) -> None:
     from slipwave.campaign import check_campaign, check_config_files, read_campaign
-    from slipwave.validation import load_schema, read_yaml
+    from slipwave.validation import load_schema
 
     # the workflow's own checks, run before Snakemake reads the files: Snakemake's
     # reader names no line when a file is not YAML
-    check_config_files([args.workflow_config, *args.configs], load_schema("config"),
-                       command_line=args.configs)
-    def merge(into: dict[str, Any], update: Mapping[str, Any]) -> None:  # as Snakemake does
-        for key, value in update.items():
-            if isinstance(value, Mapping) and isinstance(into.get(key), dict):
-                merge(into[key], value)
-            else:
-                into[key] = value
-
-    config: dict[str, Any] = {}
-    for path in [args.workflow_config, *args.configs]:
-        content, _ = read_yaml(path)
-        merge(config, content or {})
+    config = check_config_files([args.workflow_config, *args.configs], load_schema("config"),
+                                command_line=args.configs)
     campaign = read_campaign(config["tests"])
     check_campaign(config, campaign, load_schema("tests"))
     print(f"{', '.join(map(str, args.configs)) or args.workflow_config}: valid; "

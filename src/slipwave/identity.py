@@ -12,8 +12,9 @@ anything.
 
 from __future__ import annotations
 
+import functools
 import re
-from collections.abc import Iterable, Mapping, MutableMapping
+from collections.abc import Iterable, Mapping, MutableMapping, Sequence
 from typing import Any
 
 from slipwave.errors import SlipwaveError
@@ -33,6 +34,11 @@ PRODUCTS = {
 
 IDENTITY_KEYS = ("test_id", "recording_sha256")
 """What names a test's products: its id and its acquisition file's SHA-256."""
+
+
+@functools.cache
+def _test_id_pattern() -> re.Pattern[str]:
+    return re.compile(load_schema("tests")["properties"]["test_id"]["pattern"])
 
 
 def test_id_problem(text: str) -> str | None:
@@ -58,8 +64,7 @@ def test_id_problem(text: str) -> str | None:
     >>> print(test_id_problem("javascript:alert(1)//"))  # doctest: +ELLIPSIS
     'javascript:alert(1)//' is not a test id (letters, digits, ...)
     """
-    pattern = load_schema("tests")["properties"]["test_id"]["pattern"]
-    if re.fullmatch(pattern, text) is None:
+    if _test_id_pattern().fullmatch(text) is None:
         return (f"{text!r} is not a test id (letters, digits, '.', '_' and '-', from a letter "
                 "or digit)")
     return None
@@ -154,7 +159,8 @@ def _noun(product: str) -> str:
     return product if product.endswith("s") else f"a {product}"
 
 
-def check_same_test(products: Iterable[tuple[object, Mapping[Any, Any]]]) -> None:
+def check_same_test(products: Iterable[tuple[object, Mapping[Any, Any]]],
+                    keys: Sequence[str] = IDENTITY_KEYS) -> None:
     """Refuse files of different tests: their ids or recordings' checksums differ.
 
     Parameters
@@ -162,6 +168,9 @@ def check_same_test(products: Iterable[tuple[object, Mapping[Any, Any]]]) -> Non
     products
         (file, its attributes or JSON content), the first the reference. A
         product without an identity is refused too: it cannot be matched.
+    keys
+        What must agree: the whole identity, or ``("test_id",)`` for a product made
+        from no recording (a video's kymograph).
 
     Raises
     ------
@@ -184,7 +193,7 @@ def check_same_test(products: Iterable[tuple[object, Mapping[Any, Any]]]) -> Non
     first_path, first = items[0][0], identity_of(items[0][1])
     for path, attrs in items:
         identity = identity_of(attrs)
-        missing = [key for key in IDENTITY_KEYS if not identity[key]]
+        missing = [key for key in keys if not identity[key]]
         if missing:
             raise SlipwaveError(f"{path}: no {' and no '.join(missing)}: not a product of "
                                 "this slipwave, or made before products named their test; "
@@ -193,7 +202,8 @@ def check_same_test(products: Iterable[tuple[object, Mapping[Any, Any]]]) -> Non
             raise SlipwaveError(f"{path} is of test {identity['test_id']!r}, {first_path} of "
                                 f"test {first['test_id']!r}: files of different tests cannot "
                                 "be combined")
-        if identity["recording_sha256"] != first["recording_sha256"]:
+        if "recording_sha256" in keys and identity["recording_sha256"] != first[
+                "recording_sha256"]:
             raise SlipwaveError(
                 f"{path} and {first_path} are both of test {identity['test_id']!r} but of "
                 f"different recordings (SHA-256 {identity['recording_sha256'][:12]}... and "
