@@ -18,7 +18,15 @@ from slipwave.defaults import (
 )
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.solver.cache import SolverCache
-from slipwave.solver.contact import OPEN, STICK, Body, Control, Increment, NotConverged
+from slipwave.solver.contact import (
+    OPEN,
+    STICK,
+    Body,
+    Control,
+    Increment,
+    NotConverged,
+    Weakening,
+)
 from slipwave.solver.slab import Condensed, Slab, condensation_memory, condense, geometry_key
 
 RESIDUAL_TOLERANCE = 1e-8
@@ -230,6 +238,9 @@ class _Run:
 
     def __post_init__(self) -> None:
         self.tributary = self.slab.tributary_length
+        law = self.friction
+        self.weakening = (Weakening(law.fs, law.dynamic, law.dc)
+                          if isinstance(law, SlipWeakening) else None)
 
     def advance(self, previous: Control, control: Control, phase: str) -> None:
         """Solve the increment from ``previous`` to ``control`` and keep it.
@@ -248,9 +259,7 @@ class _Run:
         if self.frictionless:
             fs = fd = 0.0
         increment = self.body.solve_increment(control, self.s_prev, fs, fd, self.guess,
-                                              self.guess_sign, weakening=(
-                                                  self.friction.weakening if isinstance(
-                                                      self.friction, SlipWeakening) else None))
+                                              self.guess_sign, weakening=self.weakening)
         if not increment.residual <= RESIDUAL_TOLERANCE:
             raise NotConverged(f"residual {increment.residual:.3g} above tolerance")
         return increment
@@ -300,7 +309,9 @@ class _Run:
         if increment.u_before is None or self.r_prev is None or self.guess is None:
             return 1.0
         fs = self.friction.static_after(self.gross_slips)
-        start, peak = self.r_prev, self.body.K @ increment.u_before
+        start = self.r_prev
+        peak = (self.body.K @ increment.u_before if increment.r_before is None
+                else increment.r_before)
         q0, p0 = start[self.body.ix], start[self.body.iy]
         q1, p1 = peak[self.body.ix], peak[self.body.iy]
         sign = np.where(q1 < 0, -1.0, 1.0)
@@ -337,13 +348,15 @@ class _Run:
             before, r_before = sensors, increment.r
         else:
             before = self.condensed.sensors @ u_before
-            r_before = self.body.K @ u_before
+            r_before = (self.body.K @ u_before if increment.r_before is None
+                        else increment.r_before)
         n = self.body.n
+        # (an increment's arrays are its own: kept without copies)
         self.steps.append({
-            "ux": increment.u[:n].copy(),
-            "uy": increment.u[n:].copy(),
-            "ux_before_wave": u_before[:n].copy(),
-            "uy_before_wave": u_before[n:].copy(),
+            "ux": increment.u[:n],
+            "uy": increment.u[n:],
+            "ux_before_wave": u_before[:n],
+            "uy_before_wave": u_before[n:],
             "T_before_wave": width * float(r_before[:n].sum()),
             "N_before_wave": width * float(r_before[n:].sum()),
             "DG_before_wave": float(before[0]),
@@ -351,9 +364,9 @@ class _Run:
             "DT_before_wave": increment.dx_before if increment.u_before is not None
             else increment.dx,
             "actuator": actuator,
-            "state": increment.state.copy(),
-            "slip_direction": increment.direction.copy(),
-            "cascade_round": increment.round_slipped.copy(),
+            "state": increment.state,
+            "slip_direction": increment.direction,
+            "cascade_round": increment.round_slipped,
             "p": P / tributary,
             "q": Q / tributary,
             "gap": np.where(contact, 0.0, self.body.g0 + increment.u[self.body.iy] - increment.dy),
@@ -479,7 +492,7 @@ def simulate(
     """
     path = path or LoadPath()
     condensed = condense(slab, cache=cache)
-    body = Body(condensed.stiffness, slab.initial_gap(), condensed.compliance)
+    body = Body(condensed.stiffness, slab.initial_gap())
     run = _Run(slab, friction, body, condensed, s_prev=np.zeros(body.n), slip=np.zeros(body.n))
     width = slab.width
 
