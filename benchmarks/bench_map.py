@@ -3,8 +3,9 @@
 1. Time: ``snakemake --cores 2 results/map/map.nc`` builds the full 1572-case map (160
    elements, N held: 12 row jobs and their assembly) from a clean ``results/map/`` and
    an empty condensation cache, in a copy of the repository (the compiled solver
-   already on disk). Target <= 10 s wall (issue 33); the mean per case is reported. The figures (``map.png``, ``zones.png``,
-   which need the campaign summary, built first and not timed) are timed apart.
+   already on disk). Target <= 10 s wall (issue 33); the mean per case is reported.
+   The figures (``map.png``, ``zones.png``, which need the campaign summary, built
+   first and not timed) are timed apart.
 2. Zero failed cases; the largest residual is reported.
 3. Contiguous: >= 95 % of the cases share their behaviour with one of their four
    neighbours.
