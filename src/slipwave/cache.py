@@ -60,13 +60,11 @@ class DiskCache:
             with np.load(path) as stored:
                 if str(stored["key"]) != key:
                     return None  # another geometry's file under this name
-                condensed = Condensed(stored["stiffness"], stored["sensors"],
-                                      stored.get("compliance"))
+                condensed = Condensed(stored["stiffness"], stored["sensors"])
         except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
             return None  # a damaged cache file is rebuilt
         size = condensed.stiffness.shape[0]
-        shapes = [condensed.stiffness.shape == (size, size), condensed.sensors.shape == (2, size),
-                  condensed.compliance is None or condensed.compliance.shape == (size, size)]
+        shapes = [condensed.stiffness.shape == (size, size), condensed.sensors.shape == (2, size)]
         return condensed if all(shapes) else None
 
     def save(self, key: str, condensed: Condensed) -> None:
@@ -82,11 +80,7 @@ class DiskCache:
         """
         try:
             with atomic_output(self._path(key)) as temporary, open(temporary, "wb") as handle:
-                if condensed.compliance is None:
-                    np.savez(handle, key=np.array(key), stiffness=condensed.stiffness,
-                             sensors=condensed.sensors)
-                else:
-                    np.savez(handle, key=np.array(key), stiffness=condensed.stiffness,
-                             sensors=condensed.sensors, compliance=condensed.compliance)
+                np.savez(handle, key=np.array(key), stiffness=condensed.stiffness,
+                         sensors=condensed.sensors)
         except OSError:
             pass  # a read-only cache only costs time

@@ -50,7 +50,6 @@ SENSOR_HEIGHT = 5.0
 """Height (mm) above the contact of the DG and DD displacement sensors."""
 
 _CACHE_VERSION = "q1sri-3"
-_MAX_CONDITION = 1e10  # above: a rigid mode the holder does not stop
 
 
 @dataclass(frozen=True)
@@ -179,15 +178,10 @@ class Condensed:
     sensors
         (2, 2n): lateral displacements of the left and right faces at the
         sensor height, from the contact displacements.
-    compliance
-        The inverse of ``stiffness``; ``None`` when the slab alone is not held
-        (a holder free to rotate leaves a rigid rotation that only the contact
-        stops).
     """
 
     stiffness: np.ndarray
     sensors: np.ndarray
-    compliance: np.ndarray | None
 
 
 class CondensationStore(Protocol):
@@ -270,9 +264,7 @@ def condense(slab: Slab, *, cache: SolverCache | None = None) -> Condensed:
         unit = assemble_condensed(geometry)
     else:
         unit = cache.condensed(geometry_key(geometry), lambda: assemble_condensed(geometry))
-    E = slab.youngs_modulus
-    compliance = None if unit.compliance is None else unit.compliance / E
-    return Condensed(unit.stiffness * E, unit.sensors, compliance)
+    return Condensed(unit.stiffness * slab.youngs_modulus, unit.sensors)
 
 
 @dataclass(frozen=True)
@@ -432,8 +424,7 @@ def assemble_condensed(slab: Slab) -> Condensed:
     assembly = _assemble(slab)
     schur = _schur_complement(assembly)
     contact, sensors = _condense_sensors(0.5 * (schur + schur.T), assembly.n_contact)
-    held = np.linalg.cond(contact) < _MAX_CONDITION
-    return Condensed(contact, sensors, np.linalg.inv(contact) if held else None)
+    return Condensed(contact, sensors)
 
 
 @dataclass(frozen=True)
