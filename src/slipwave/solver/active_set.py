@@ -713,7 +713,6 @@ def _residuals(s: ZoneSolver, fl: Flat, r: np.ndarray, dx: float
 @njit(cache=True)
 def _solve_once(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray
                 ) -> tuple[float, float, np.ndarray, bool]:
-    n = s.g0.size
     m = s.counts[SIZE]
     given_dx = 0.0 if fl.dx_unknown else fl.values[0]
     given_dy = 0.0 if fl.dy_unknown else fl.values[1]
@@ -730,7 +729,6 @@ def _solve_once(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray
     dx = motion[0] if fl.dx_unknown else given_dx
     dy = motion[1] if fl.dy_unknown else given_dy
     _assemble(s, z, dx, dy, u, r)
-    _ = n
     return dx, dy, z, regular
 
 
@@ -816,7 +814,6 @@ def slip_sensitivity(s: ZoneSolver, fl: Flat, state: np.ndarray, pressure: np.nd
         (k, k) for the k slipping nodes.
 
     """
-    n = state.size
     m = s.counts[SIZE]
     slipping = _slipping(state)
     k = slipping.size
@@ -828,7 +825,6 @@ def slip_sensitivity(s: ZoneSolver, fl: Flat, state: np.ndarray, pressure: np.nd
         dz, motion, _ = _schur_solve(s, fl, b, np.zeros(2), terms, totals)
         for j in range(k):
             sensitivity[j, column] = dz[s.position[slipping[j]]] - motion[0]
-    _ = n
     return sensitivity
 
 
