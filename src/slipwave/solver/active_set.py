@@ -55,10 +55,15 @@ REFINE_ABOVE = 1e-12
 """Relative residual of a solve (scaled by the largest contact force) above which it
 is refined: a few hundred times rounding, far below the solver's 1e-8 tolerance."""
 
-# counters of ZoneSolver.counts
-SIZE, SOLVES, ADDED, REMOVED, ROWS_CHANGED, REBUILDS, REFINEMENTS, INCREMENTS = range(8)
+# counters of ZoneSolver.counts (PENDING: the rank-one terms not yet added to the inverse)
+SIZE, SOLVES, ADDED, REMOVED, ROWS_CHANGED, REBUILDS, REFINEMENTS, INCREMENTS, PENDING = \
+    range(9)
 COUNTERS = ("size", "solves", "added", "removed", "rows changed", "rebuilds", "refinements",
-            "increments")
+            "increments", "pending")
+PENDING_TERMS = 8
+"""Rank-one terms of the bordered inverse's updates kept aside before they are added to
+it in one pass: a free displacement added costs one read of the inverse, not a read
+and a rewrite."""
 # The known displacements' product is updated by the nodes whose s_prev moved, and
 # made afresh every this many increments: the updates' rounding does not build up.
 _REFRESH_EVERY = 256
@@ -80,7 +85,8 @@ class ZoneSolver(NamedTuple):
     sum_x, sum_y
         Sums of K's x and y rows (2n,): ``sum Q = sum_x @ u``, ``sum P = sum_y @ u``.
     inverse
-        (2n, 2n); its leading m x m block is the inverse of M.
+        (2n, 2n); its leading m x m block plus the pending terms' products is the
+        inverse of M.
     columns
         (2n, 2n); row p is the column of K of free displacement p.
     coefficient
@@ -97,6 +103,9 @@ class ZoneSolver(NamedTuple):
         (2n,): each displacement's place among the free ones, -1 if known.
     counts
         Counters (:data:`COUNTERS`); ``counts[SIZE]`` is m.
+    pending_u, pending_v
+        (:data:`PENDING_TERMS`, 2n): the first ``counts[PENDING]`` rows are rank-one
+        terms ``u v^T`` of the inverse not yet added to ``inverse`` (zero from m on).
 
     """
 
@@ -113,6 +122,8 @@ class ZoneSolver(NamedTuple):
     dofs: np.ndarray
     position: np.ndarray
     counts: np.ndarray
+    pending_u: np.ndarray
+    pending_v: np.ndarray
 
 
 class Flat(NamedTuple):
@@ -154,7 +165,8 @@ def zone_solver(stiffness: np.ndarray, initial_gap: np.ndarray) -> ZoneSolver:
         known=np.zeros((3, n2)), base=np.concatenate([np.zeros(g0.size), -g0]),
         dofs=np.zeros(n2, dtype=np.int64),
         position=np.full(n2, -1, dtype=np.int64),
-        counts=np.zeros(len(COUNTERS), dtype=np.int64))
+        counts=np.zeros(len(COUNTERS), dtype=np.int64),
+        pending_u=np.zeros((PENDING_TERMS, n2)), pending_v=np.zeros((PENDING_TERMS, n2)))
     _refresh_known(solver)
     return solver
 
@@ -228,6 +240,25 @@ def _release(s: ZoneSolver, dof: int, sign: float) -> None:
 
 
 @njit(cache=True, fastmath=FAST)
+def _flush(s: ZoneSolver) -> None:
+    """Add the pending rank-one terms to the kept inverse, in one pass over it."""
+    count = s.counts[PENDING]
+    if count == 0:
+        return
+    m = s.counts[SIZE]
+    B = s.inverse
+    for a in range(m):
+        row = B[a]
+        for j in range(count):
+            factor = s.pending_u[j, a]
+            if factor != 0.0:
+                v = s.pending_v[j]
+                for b in range(m):
+                    row[b] += factor * v[b]
+    s.counts[PENDING] = 0
+
+
+@njit(cache=True, fastmath=FAST)
 def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
     """Free displacement ``dof`` with its equation: the bordered inverse, O(m^2).
 
@@ -238,9 +269,13 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
     K = s.K
     column = np.empty(m)  # the present equations at the new column
     row = np.empty(m)  # the new equation at the present columns
+    n = s.g0.size
+    along = s.KT[dof]  # column dof of K, read along a row
     for p in range(m):
-        column[p] = _equation_entry(K, s.dofs[p], s.coefficient[p], dof)
-        row[p] = _equation_entry(K, dof, coefficient, s.dofs[p])
+        d = s.dofs[p]
+        c = s.coefficient[p]
+        column[p] = along[d] - c * along[n + d] if c != 0.0 else along[d]
+        row[p] = _equation_entry(K, dof, coefficient, d)
     corner = _equation_entry(K, dof, coefficient, dof)
     B_column = np.zeros(m)
     row_B = np.zeros(m)
@@ -250,6 +285,16 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
             total += B[a, b] * column[b]
             row_B[b] += row[a] * B[a, b]
         B_column[a] = total
+    for j in range(s.counts[PENDING]):  # the pending terms' part of the products
+        u, v = s.pending_u[j], s.pending_v[j]
+        v_column = 0.0
+        row_u = 0.0
+        for a in range(m):
+            v_column += v[a] * column[a]
+            row_u += row[a] * u[a]
+        for a in range(m):
+            B_column[a] += u[a] * v_column
+            row_B[a] += row_u * v[a]
     pivot = corner
     scale = abs(corner)
     for a in range(m):
@@ -257,12 +302,19 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
         scale += abs(row[a] * B_column[a])
     if not (np.isfinite(pivot) and abs(pivot) > 1e-14 * scale):
         return False
+    if s.counts[PENDING] == PENDING_TERMS:
+        _flush(s)
+    # the old block gains (B column)(row B) / pivot: a pending term
+    k = s.counts[PENDING]
+    u, v = s.pending_u[k], s.pending_v[k]
     for a in range(m):
-        factor = B_column[a] / pivot
-        for b in range(m):
-            B[a, b] += factor * row_B[b]
-        B[a, m] = -factor
+        u[a] = B_column[a] / pivot
+        v[a] = row_B[a]
+        B[a, m] = -u[a]
         B[m, a] = -row_B[a] / pivot
+    for a in range(m, u.size):
+        u[a] = v[a] = 0.0
+    s.counts[PENDING] = k + 1
     B[m, m] = 1.0 / pivot
     s.dofs[m] = dof
     s.coefficient[m] = coefficient
@@ -281,6 +333,7 @@ def _remove(s: ZoneSolver, p: int) -> bool:
     The last free displacement takes its place. False (nothing changed) when the
     reduced matrix is singular.
     """
+    _flush(s)
     m = s.counts[SIZE]
     B = s.inverse
     last = m - 1
@@ -312,6 +365,7 @@ def _remove(s: ZoneSolver, p: int) -> bool:
 @njit(cache=True)
 def _change_row(s: ZoneSolver, p: int, coefficient: float) -> bool:
     """A slipping node's new coefficient (or none: opened): Sherman-Morrison, O(m^2)."""
+    _flush(s)
     m = s.counts[SIZE]
     n = s.g0.size
     B = s.inverse
@@ -385,13 +439,19 @@ def _lu_solve(A: np.ndarray, B: np.ndarray) -> bool:
                     A[i, c] -= factor * A[j, c]
                 for c in range(k):
                     B[i, c] -= factor * B[j, c]
+    # back substitution row by row: B's rows are read along their length
     for j in range(n - 1, -1, -1):
+        row = B[j]
+        for i in range(j + 1, n):
+            factor = A[j, i]
+            if factor != 0.0:
+                solved = B[i]
+                for c in range(k):
+                    row[c] -= factor * solved[c]
+        pivot = A[j, j]
         for c in range(k):
-            value = B[j, c]
-            for i in range(j + 1, n):
-                value -= A[j, i] * B[i, c]
-            B[j, c] = value / A[j, j]
-            if not np.isfinite(B[j, c]):
+            row[c] /= pivot
+            if not np.isfinite(row[c]):
                 return False
     return True
 
@@ -409,6 +469,7 @@ def _rebuild(s: ZoneSolver, dofs: np.ndarray, coefficients: np.ndarray) -> bool:
         _copy(s.columns[p], s.KT[dofs[p]])
     s.counts[SIZE] = m
     s.counts[REBUILDS] += 1
+    s.counts[PENDING] = 0
     _refresh_known(s)
     if m == 0:
         return True
@@ -565,8 +626,9 @@ def _flat_terms(s: ZoneSolver, m: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, fastmath=FAST)
-def _apply_inverse(B: np.ndarray, rhs: np.ndarray, count: int, m: int) -> np.ndarray:
-    """``B[:m, :m] @ rhs[k]`` for the first ``count`` rows of rhs, in one pass over B."""
+def _apply_inverse(s: ZoneSolver, rhs: np.ndarray, count: int, m: int) -> np.ndarray:
+    """The inverse times ``rhs[k]`` for the first ``count`` rows of rhs, one pass over it."""
+    B = s.inverse
     out = np.zeros((count, m))
     if count == 1:
         for a in range(m):
@@ -592,6 +654,14 @@ def _apply_inverse(B: np.ndarray, rhs: np.ndarray, count: int, m: int) -> np.nda
             out[0, a] = t0
             out[1, a] = t1
             out[2, a] = t2
+    for j in range(s.counts[PENDING]):
+        u, v = s.pending_u[j], s.pending_v[j]
+        for k in range(count):
+            product = 0.0
+            for c in range(m):
+                product += v[c] * rhs[k, c]
+            for a in range(m):
+                out[k, a] += u[a] * product
     return out
 
 
@@ -619,7 +689,7 @@ def _schur_solve(s: ZoneSolver, fl: Flat, b: np.ndarray, flat_rhs: np.ndarray,
     _copy(rhs[0], b)
     for k in range(count):
         _copy(rhs[1 + k], terms[1 + which[k]])
-    solved = _apply_inverse(s.inverse, rhs, 1 + count, m)
+    solved = _apply_inverse(s, rhs, 1 + count, m)
     z = np.empty(m)
     _copy(z, solved[0])
     motion = np.zeros(2)
@@ -672,11 +742,21 @@ def _assemble(s: ZoneSolver, z: np.ndarray, dx: float, dy: float,
         u[s.dofs[p]] = z[p]
     for k in range(2 * n):
         r[k] = s.known[0, k] + dx * s.known[1, k] + dy * s.known[2, k]
-    for p in range(m):
+    # four columns per pass over r: a quarter of its loads and stores
+    columns = s.columns
+    p = 0
+    while p + 4 <= m:
+        z0, z1, z2, z3 = z[p], z[p + 1], z[p + 2], z[p + 3]
+        c0, c1, c2, c3 = columns[p], columns[p + 1], columns[p + 2], columns[p + 3]
+        for k in range(2 * n):
+            r[k] += z0 * c0[k] + z1 * c1[k] + z2 * c2[k] + z3 * c3[k]
+        p += 4
+    while p < m:
         zp = z[p]
-        column = s.columns[p]
+        column = columns[p]
         for k in range(2 * n):
             r[k] += zp * column[k]
+        p += 1
 
 
 @njit(cache=True)
@@ -1311,7 +1391,8 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
             sum_y: np.ndarray, inverse: np.ndarray, columns: np.ndarray,
             coefficient: np.ndarray, known: np.ndarray, base: np.ndarray,
             dofs: np.ndarray, position: np.ndarray, counts: np.ndarray,
-            flat_values: np.ndarray, dx_unknown: bool, dy_unknown: bool,
+            pending_u: np.ndarray, pending_v: np.ndarray, flat_values: np.ndarray,
+            dx_unknown: bool, dy_unknown: bool,
             s_prev: np.ndarray, static: float, dynamic: float, law: np.ndarray,
             guess: np.ndarray, guess_sign: np.ndarray, heal: bool, u: np.ndarray,
             r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray, state: np.ndarray,
@@ -1325,8 +1406,8 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     ----------
     K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base, dofs, position
         The fields of the body's :class:`ZoneSolver`, in order.
-    counts
-        Its last field.
+    counts, pending_u, pending_v
+        Its last fields.
     flat_values, dx_unknown, dy_unknown
         The fields of the increment's :class:`Flat`.
     s_prev, static, dynamic, law, guess, guess_sign, heal
@@ -1341,7 +1422,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
 
     """
     s = ZoneSolver(K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base,
-                   dofs, position, counts)
+                   dofs, position, counts, pending_u, pending_v)
     return _iterate(s, Flat(flat_values, dx_unknown, dy_unknown), s_prev, static, dynamic,
                     law, guess, guess_sign, heal, u, r, u_before, r_before, state, sign,
                     round_slipped, scalars)
