@@ -3,6 +3,8 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(CURDIR)/$(VENV)/bin
 STAMP := $(VENV)/.installed
+# the package alone, what `make run` needs (the test and docs tools come with `install`)
+RUN_STAMP := $(VENV)/.installed-run
 # Rules call the `slipwave` command: the venv goes first on PATH.
 export PATH := $(BIN):$(PATH)
 
@@ -14,7 +16,13 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
-	touch $(STAMP)
+	touch $(STAMP) $(RUN_STAMP)
+
+$(RUN_STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e .
+	touch $(RUN_STAMP)
 
 # What pip cannot install: Debian's Chromium and poppler-utils, with which the tests look
 # at the reports as a reader does (they skip, saying so, without them), and the Pango
@@ -29,7 +37,7 @@ system-deps:
 		else echo "missing Debian packages (install them as root): $$missing"; fi; \
 	fi
 
-run: $(STAMP)
+run: $(RUN_STAMP)
 	$(BIN)/snakemake --cores 2
 
 # ruff (style, imports, docstring layout), numpydoc (every public function documents

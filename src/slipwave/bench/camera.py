@@ -13,7 +13,6 @@ from os import PathLike
 from pathlib import Path
 from typing import Literal
 
-import av
 import numpy as np
 
 from slipwave.errors import SlipwaveError
@@ -56,6 +55,8 @@ def write_video(
         The video written.
 
     """
+    import av  # PyAV loads FFmpeg: only where a video is written
+
     target = Path(path)
     time_base = Fraction(1, 10_000)
     with atomic_output(target) as temporary:
@@ -135,6 +136,8 @@ def write_image_sequence(
         The folder.
 
     """
+    import av  # PyAV loads FFmpeg: only where a video is written
+
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     lines = ["file,camera_time_s"]

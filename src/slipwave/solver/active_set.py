@@ -106,6 +106,10 @@ class ZoneSolver(NamedTuple):
     pending_u, pending_v
         (:data:`PENDING_TERMS`, 2n): the first ``counts[PENDING]`` rows are rank-one
         terms ``u v^T`` of the inverse not yet added to ``inverse`` (zero from m on).
+    responses
+        (3, 2n): the inverse times each known product's part in the equations
+        (:func:`_flat_terms`), kept along with the inverse: a solve is then O(n m)
+        products, no pass over the inverse.
 
     """
 
@@ -124,6 +128,7 @@ class ZoneSolver(NamedTuple):
     counts: np.ndarray
     pending_u: np.ndarray
     pending_v: np.ndarray
+    responses: np.ndarray
 
 
 class Flat(NamedTuple):
@@ -166,7 +171,8 @@ def zone_solver(stiffness: np.ndarray, initial_gap: np.ndarray) -> ZoneSolver:
         dofs=np.zeros(n2, dtype=np.int64),
         position=np.full(n2, -1, dtype=np.int64),
         counts=np.zeros(len(COUNTERS), dtype=np.int64),
-        pending_u=np.zeros((PENDING_TERMS, n2)), pending_v=np.zeros((PENDING_TERMS, n2)))
+        pending_u=np.zeros((PENDING_TERMS, n2)), pending_v=np.zeros((PENDING_TERMS, n2)),
+        responses=np.zeros((3, n2)))
     _refresh_known(solver)
     return solver
 
@@ -228,6 +234,37 @@ def _equation_entry(K: np.ndarray, dof: int, coefficient: float, column: int) ->
 
 
 @njit(cache=True)
+def _known_values(s: ZoneSolver, dof: int) -> np.ndarray:
+    """A known displacement's value in each known product: its base, x or y indicator."""
+    values = np.zeros(3)
+    values[0] = s.base[dof]
+    values[1 if dof < s.g0.size else 2] = 1.0
+    return values
+
+
+@njit(cache=True)
+def _row_terms(s: ZoneSolver, dof: int, coefficient: float) -> np.ndarray:
+    """Equation ``K[dof] - coefficient K[n + dof]`` applied to each known product."""
+    n = s.g0.size
+    terms = np.empty(3)
+    for k in range(3):
+        terms[k] = s.known[k, dof]
+        if coefficient != 0.0:
+            terms[k] -= coefficient * s.known[k, n + dof]
+    return terms
+
+
+@njit(cache=True)
+def _refresh_responses(s: ZoneSolver) -> None:
+    """The responses afresh: one pass over the inverse."""
+    m = s.counts[SIZE]
+    solved = _apply_inverse(s, _flat_terms(s, m), 3, m)
+    for k in range(3):
+        for p in range(m):
+            s.responses[k, p] = solved[k, p]
+
+
+@njit(cache=True)
 def _release(s: ZoneSolver, dof: int, sign: float) -> None:
     """Take displacement ``dof`` out of the known ones (sign -1) or back in (+1)."""
     n = s.g0.size
@@ -247,14 +284,13 @@ def _flush(s: ZoneSolver) -> None:
         return
     m = s.counts[SIZE]
     B = s.inverse
+    V = s.pending_v
     for a in range(m):
-        row = B[a]
         for j in range(count):
             factor = s.pending_u[j, a]
             if factor != 0.0:
-                v = s.pending_v[j]
                 for b in range(m):
-                    row[b] += factor * v[b]
+                    B[a, b] += factor * V[j, b]
     s.counts[PENDING] = 0
 
 
@@ -275,7 +311,7 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
         d = s.dofs[p]
         c = s.coefficient[p]
         column[p] = along[d] - c * along[n + d] if c != 0.0 else along[d]
-        row[p] = _equation_entry(K, dof, coefficient, d)
+        row[p] = K[dof, d] - coefficient * K[n + dof, d] if coefficient != 0.0 else K[dof, d]
     corner = _equation_entry(K, dof, coefficient, dof)
     B_column = np.zeros(m)
     row_B = np.zeros(m)
@@ -302,6 +338,13 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
         scale += abs(row[a] * B_column[a])
     if not (np.isfinite(pivot) and abs(pivot) > 1e-14 * scale):
         return False
+    # the responses: the bordered inverse applied to the terms, which lose the new
+    # column times the displacement's known value (it is free now) and gain a row
+    values = _known_values(s, dof)
+    row_responses = np.zeros(3)
+    for k in range(3):
+        for p in range(m):
+            row_responses[k] += row[p] * s.responses[k, p]
     if s.counts[PENDING] == PENDING_TERMS:
         _flush(s)
     # the old block gains (B column)(row B) / pivot: a pending term
@@ -323,6 +366,13 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
     s.counts[SIZE] = m + 1
     s.counts[ADDED] += 1
     _release(s, dof, -1.0)
+    new_terms = _row_terms(s, dof, coefficient)
+    for k in range(3):
+        w = (new_terms[k] + values[k] * corner - row_responses[k]) / pivot
+        y = s.responses[k]
+        for p in range(m):
+            y[p] -= B_column[p] * w
+        y[m] = w - values[k]
     return True
 
 
@@ -346,15 +396,24 @@ def _remove(s: ZoneSolver, p: int) -> bool:
             B[k, p], B[k, last] = B[k, last], B[k, p]
         s.dofs[p], s.dofs[last] = s.dofs[last], s.dofs[p]
         s.coefficient[p], s.coefficient[last] = s.coefficient[last], s.coefficient[p]
+        for k in range(3):
+            s.responses[k, p], s.responses[k, last] = s.responses[k, last], s.responses[k, p]
         s.position[s.dofs[p]] = p
         for k in range(s.columns.shape[1]):
             s.columns[p, k], s.columns[last, k] = s.columns[last, k], s.columns[p, k]
     pivot = B[last, last]
+    dof = s.dofs[last]
+    # the responses of the reduced inverse, the terms gaining the fixed column
+    values = _known_values(s, dof)
+    for k in range(3):
+        y = s.responses[k]
+        w = (y[last] + values[k]) / pivot
+        for a in range(last):
+            y[a] -= B[a, last] * w
     for a in range(last):
         factor = B[a, last] / pivot
         for b in range(last):
             B[a, b] -= factor * B[last, b]
-    dof = s.dofs[last]
     s.position[dof] = -1
     s.counts[SIZE] = last
     s.counts[REMOVED] += 1
@@ -384,6 +443,15 @@ def _change_row(s: ZoneSolver, p: int, coefficient: float) -> bool:
     denominator = 1.0 + delta_B[p]
     if not (np.isfinite(denominator) and abs(denominator) > 1e-14):
         return False
+    # the responses: row p's term changes with its coefficient
+    for k in range(3):
+        y = s.responses[k]
+        product = 0.0
+        for b in range(m):
+            product += delta[b] * y[b]
+        w = (change * s.known[k, n + dof] - product) / denominator
+        for a in range(m):
+            y[a] += column[a] * w
     for a in range(m):
         factor = column[a] / denominator
         for b in range(m):
@@ -441,17 +509,15 @@ def _lu_solve(A: np.ndarray, B: np.ndarray) -> bool:
                     B[i, c] -= factor * B[j, c]
     # back substitution row by row: B's rows are read along their length
     for j in range(n - 1, -1, -1):
-        row = B[j]
         for i in range(j + 1, n):
             factor = A[j, i]
             if factor != 0.0:
-                solved = B[i]
                 for c in range(k):
-                    row[c] -= factor * solved[c]
+                    B[j, c] -= factor * B[i, c]
         pivot = A[j, j]
         for c in range(k):
-            row[c] /= pivot
-            if not np.isfinite(row[c]):
+            B[j, c] /= pivot
+            if not np.isfinite(B[j, c]):
                 return False
     return True
 
@@ -475,9 +541,12 @@ def _rebuild(s: ZoneSolver, dofs: np.ndarray, coefficients: np.ndarray) -> bool:
         return True
     M = np.empty((m, m))
     K = s.K
+    n = s.g0.size
     for p in range(m):
         for q in range(m):
-            M[p, q] = _equation_entry(K, dofs[p], coefficients[p], dofs[q])
+            M[p, q] = K[dofs[p], dofs[q]]
+            if coefficients[p] != 0.0:
+                M[p, q] -= coefficients[p] * K[n + dofs[p], dofs[q]]
     inverse = np.zeros((m, m))
     for p in range(m):
         inverse[p, p] = 1.0
@@ -489,6 +558,7 @@ def _rebuild(s: ZoneSolver, dofs: np.ndarray, coefficients: np.ndarray) -> bool:
         return False
     for p in range(m):
         _copy(s.inverse[p, :m], inverse[p])
+    _refresh_responses(s)
     return True
 
 
@@ -591,15 +661,16 @@ def set_base(s: ZoneSolver, s_prev: np.ndarray) -> None:
     if 4 * moved > n or s.counts[INCREMENTS] % _REFRESH_EVERY == 0:
         _copy(s.base[:n], s_prev)
         _refresh_known(s)
-        return
-    known = s.known[0]
-    for i in range(n):
-        change = s_prev[i] - s.base[i]
-        if change != 0.0 and s.position[i] < 0:
-            column = s.KT[i]
-            for k in range(2 * n):
-                known[k] += change * column[k]
-        s.base[i] = s_prev[i]
+    else:
+        known = s.known[0]
+        for i in range(n):
+            change = s_prev[i] - s.base[i]
+            if change != 0.0 and s.position[i] < 0:
+                column = s.KT[i]
+                for k in range(2 * n):
+                    known[k] += change * column[k]
+            s.base[i] = s_prev[i]
+    _refresh_responses(s)
 
 
 # ----------------------------------------------------------------------------------
@@ -607,22 +678,35 @@ def set_base(s: ZoneSolver, s_prev: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def _flat_terms(s: ZoneSolver, m: int) -> tuple[np.ndarray, np.ndarray]:
+def _flat_terms(s: ZoneSolver, m: int) -> np.ndarray:
     """The known vectors' part in the equations: ``E_p @ v`` for rows 0 (values) 1, 2."""
-    n = s.g0.size
     terms = np.empty((3, m))
     for p in range(m):
-        d = s.dofs[p]
-        c = s.coefficient[p]
+        row = _row_terms(s, s.dofs[p], s.coefficient[p])
         for k in range(3):
-            terms[k, p] = s.known[k, d] - c * s.known[k, n + d] if c != 0.0 \
-                else s.known[k, d]
-    totals = np.zeros((3, 2))  # sum over x rows, y rows of each known product
+            terms[k, p] = row[k]
+    return terms
+
+
+@njit(cache=True)
+def _totals(s: ZoneSolver) -> np.ndarray:
+    """Each known product summed over the x rows (T) and over the y rows (N)."""
+    n = s.g0.size
+    totals = np.zeros((3, 2))
     for k in range(3):
         for i in range(n):
             totals[k, 0] += s.known[k, i]
             totals[k, 1] += s.known[k, n + i]
-    return terms, totals
+    return totals
+
+
+@njit(cache=True)
+def _inverse_times(s: ZoneSolver, b: np.ndarray) -> np.ndarray:
+    """The kept inverse times one vector."""
+    m = b.size
+    rhs = np.empty((1, m))
+    _copy(rhs[0], b)
+    return _apply_inverse(s, rhs, 1, m)[0]
 
 
 @njit(cache=True, fastmath=FAST)
@@ -666,17 +750,17 @@ def _apply_inverse(s: ZoneSolver, rhs: np.ndarray, count: int, m: int) -> np.nda
 
 
 @njit(cache=True)
-def _schur_solve(s: ZoneSolver, fl: Flat, b: np.ndarray, flat_rhs: np.ndarray,
-                 terms: np.ndarray, totals: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, bool]:
+def _schur_solve(s: ZoneSolver, fl: Flat, inverse_b: np.ndarray, flat_rhs: np.ndarray,
+                 totals: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     """Solve ``[M F; G H] [z; f] = [b; flat_rhs]`` with the kept inverse of M.
 
-    f holds the unknown flat motions (dx, then dy, as unknown); their equations are
-    T's then N's; F's columns are ``terms[1]`` (dx) and ``terms[2]`` (dy). Returns
-    z, f (2,: dx and dy parts, zero where given) and whether the flat's 2 x 2 was
-    regular.
+    ``inverse_b`` is the inverse of M times b. f holds the unknown flat motions (dx,
+    then dy, as unknown); their equations are T's then N's; F's columns are the
+    terms of the stuck x (dx) and contact y (dy), whose products with the inverse are
+    the kept responses 1 and 2. Returns z, f (2,: dx and dy parts, zero where given)
+    and whether the flat's 2 x 2 was regular.
     """
-    m = b.size
+    m = inverse_b.size
     which = np.empty(2, dtype=np.int64)  # 0: dx (T equation), 1: dy (N equation)
     count = 0
     if fl.dx_unknown:
@@ -685,13 +769,13 @@ def _schur_solve(s: ZoneSolver, fl: Flat, b: np.ndarray, flat_rhs: np.ndarray,
     if fl.dy_unknown:
         which[count] = 1
         count += 1
-    rhs = np.empty((1 + count, m))
-    _copy(rhs[0], b)
+    solved = np.empty((1 + count, m))
+    _copy(solved[0], inverse_b)
     for k in range(count):
-        _copy(rhs[1 + k], terms[1 + which[k]])
-    solved = _apply_inverse(s, rhs, 1 + count, m)
+        for p in range(m):
+            solved[1 + k, p] = s.responses[1 + which[k], p]
     z = np.empty(m)
-    _copy(z, solved[0])
+    _copy(z, inverse_b)
     motion = np.zeros(2)
     if count == 0:
         return z, motion, True
@@ -743,19 +827,18 @@ def _assemble(s: ZoneSolver, z: np.ndarray, dx: float, dy: float,
     for k in range(2 * n):
         r[k] = s.known[0, k] + dx * s.known[1, k] + dy * s.known[2, k]
     # four columns per pass over r: a quarter of its loads and stores
-    columns = s.columns
+    # (indexed in two dimensions: a row taken as an array would be reference-counted)
+    C = s.columns
     p = 0
     while p + 4 <= m:
         z0, z1, z2, z3 = z[p], z[p + 1], z[p + 2], z[p + 3]
-        c0, c1, c2, c3 = columns[p], columns[p + 1], columns[p + 2], columns[p + 3]
         for k in range(2 * n):
-            r[k] += z0 * c0[k] + z1 * c1[k] + z2 * c2[k] + z3 * c3[k]
+            r[k] += z0 * C[p, k] + z1 * C[p + 1, k] + z2 * C[p + 2, k] + z3 * C[p + 3, k]
         p += 4
     while p < m:
         zp = z[p]
-        column = columns[p]
         for k in range(2 * n):
-            r[k] += zp * column[k]
+            r[k] += zp * C[p, k]
         p += 1
 
 
@@ -796,16 +879,17 @@ def _solve_once(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray
     m = s.counts[SIZE]
     given_dx = 0.0 if fl.dx_unknown else fl.values[0]
     given_dy = 0.0 if fl.dy_unknown else fl.values[1]
-    terms, totals = _flat_terms(s, m)
-    b = np.empty(m)
+    totals = _totals(s)
+    y = s.responses
+    inverse_b = np.empty(m)  # of b = -(terms 0 + dx terms 1 + dy terms 2), dx, dy given
     for p in range(m):
-        b[p] = -(terms[0, p] + given_dx * terms[1, p] + given_dy * terms[2, p])
+        inverse_b[p] = -(y[0, p] + given_dx * y[1, p] + given_dy * y[2, p])
     flat_rhs = np.zeros(2)
     if fl.dx_unknown:  # T = sum Q + machine dx
         flat_rhs[0] = fl.values[2] - totals[0, 0] - given_dy * totals[2, 0]
     if fl.dy_unknown:
         flat_rhs[1] = fl.values[3] - totals[0, 1] - given_dx * totals[1, 1]
-    z, motion, regular = _schur_solve(s, fl, b, flat_rhs, terms, totals)
+    z, motion, regular = _schur_solve(s, fl, inverse_b, flat_rhs, totals)
     dx = motion[0] if fl.dx_unknown else given_dx
     dy = motion[1] if fl.dy_unknown else given_dy
     _assemble(s, z, dx, dy, u, r)
@@ -842,12 +926,12 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
     # one step of iterative refinement: the same system for the residual
     s.counts[REFINEMENTS] += 1
     m = s.counts[SIZE]
-    terms, totals = _flat_terms(s, m)
     for p in range(m):
         rows[p] = -rows[p]
     for k in range(2):
         flat_rows[k] = -flat_rows[k]
-    correction, motion, regular = _schur_solve(s, fl, rows, flat_rows, terms, totals)
+    correction, motion, regular = _schur_solve(s, fl, _inverse_times(s, rows), flat_rows,
+                                               _totals(s))
     if regular:
         for p in range(m):
             z[p] += correction[p]
@@ -856,6 +940,7 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
         _assemble(s, z, dx, dy, u, r)
         relative = _residuals(s, fl, r, dx)[2]
         if relative <= REFINE_ABOVE:
+            _refresh_responses(s)  # their updates' rounding, cleared for the next solves
             return dx, dy, True
     # the updates have lost accuracy: the inverse afresh
     dofs = np.empty(m, dtype=np.int64)
@@ -897,12 +982,12 @@ def slip_sensitivity(s: ZoneSolver, fl: Flat, state: np.ndarray, pressure: np.nd
     m = s.counts[SIZE]
     slipping = _slipping(state)
     k = slipping.size
-    terms, totals = _flat_terms(s, m)
+    totals = _totals(s)
     sensitivity = np.empty((k, k))
     for column in range(k):
         b = np.zeros(m)
         b[s.position[slipping[column]]] = pressure[slipping[column]]
-        dz, motion, _ = _schur_solve(s, fl, b, np.zeros(2), terms, totals)
+        dz, motion, _ = _schur_solve(s, fl, _inverse_times(s, b), np.zeros(2), totals)
         for j in range(k):
             sensitivity[j, column] = dz[s.position[slipping[j]]] - motion[0]
     return sensitivity
@@ -1195,8 +1280,9 @@ def _settle(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, limit: np.ndarray,
     new = np.empty(n, dtype=np.int8)
     new_sign = np.empty(n)
     slipping = np.empty(n, dtype=np.bool_)
-    seen_states = np.empty((MAX_ITERATIONS + 1, n), dtype=np.int8)
-    seen_signs = np.empty((MAX_ITERATIONS + 1, n))
+    # the states seen, kept once a round takes a second iteration (most take one)
+    seen_states = np.empty((0, n), dtype=np.int8)
+    seen_signs = np.empty((0, n))
     seen = 0
     for iteration in range(1, MAX_ITERATIONS + 1):
         for i in range(n):
@@ -1222,6 +1308,9 @@ def _settle(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, limit: np.ndarray,
             new_sign[i] = np.sign(work[4, i]) if slipping[i] and limit[i] > 0 else sign[i]
         if _same(new, state) and _same(new_sign, sign):
             return iteration
+        if seen_states.shape[0] == 0:
+            seen_states = np.empty((MAX_ITERATIONS + 1, n), dtype=np.int8)
+            seen_signs = np.empty((MAX_ITERATIONS + 1, n))
         repeated = _seen(seen_states, seen_signs, seen, new, new_sign)
         _copy(seen_states[seen if not repeated else 0], new)
         _copy(seen_signs[seen if not repeated else 0], new_sign)
@@ -1391,8 +1480,8 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
             sum_y: np.ndarray, inverse: np.ndarray, columns: np.ndarray,
             coefficient: np.ndarray, known: np.ndarray, base: np.ndarray,
             dofs: np.ndarray, position: np.ndarray, counts: np.ndarray,
-            pending_u: np.ndarray, pending_v: np.ndarray, flat_values: np.ndarray,
-            dx_unknown: bool, dy_unknown: bool,
+            pending_u: np.ndarray, pending_v: np.ndarray, responses: np.ndarray,
+            flat_values: np.ndarray, dx_unknown: bool, dy_unknown: bool,
             s_prev: np.ndarray, static: float, dynamic: float, law: np.ndarray,
             guess: np.ndarray, guess_sign: np.ndarray, heal: bool, u: np.ndarray,
             r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray, state: np.ndarray,
@@ -1406,7 +1495,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     ----------
     K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base, dofs, position
         The fields of the body's :class:`ZoneSolver`, in order.
-    counts, pending_u, pending_v
+    counts, pending_u, pending_v, responses
         Its last fields.
     flat_values, dx_unknown, dy_unknown
         The fields of the increment's :class:`Flat`.
@@ -1422,7 +1511,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
 
     """
     s = ZoneSolver(K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base,
-                   dofs, position, counts, pending_u, pending_v)
+                   dofs, position, counts, pending_u, pending_v, responses)
     return _iterate(s, Flat(flat_values, dx_unknown, dy_unknown), s_prev, static, dynamic,
                     law, guess, guess_sign, heal, u, r, u_before, r_before, state, sign,
                     round_slipped, scalars)
