@@ -16,15 +16,15 @@ free displacements), and a slipping node's new coefficient changes one row
 (Sherman-Morrison, O(m^2)); the increment's active set, which changes a few nodes
 per iteration, then never factorises. Each solve checks its residual: above
 :data:`REFINE_ABOVE` it takes a step of iterative refinement, and if that is not
-enough the inverse is formed again from scratch (LAPACK), as it is whenever that
-is cheaper than the updates or an update meets a vanishing pivot. A state that is
+enough the inverse is formed again from scratch (Gaussian elimination), as it is
+whenever that is cheaper than the updates or an update meets a vanishing pivot. A state that is
 singular (no inverse) is reported as such, never solved.
 
 The increment's loop (:func:`iterate`: the algorithm of
 :meth:`slipwave.solver.contact.Body.solve_increment`, whose docstring and module
 describe it) runs on this kept inverse: each iteration moves it to the new guess by
-low-rank updates and solves it by products, O(m^2 + n m) for m free displacements of n
-nodes, not a factorisation.
+low-rank updates, O(m^2) each, and solves it by the kept responses and one product
+with the free columns of the stiffness, O(n m) for m free displacements of n nodes.
 
 The cascade keeps its order: nodes join the wave round by round, those loaded
 beyond ``fs P`` by the previous round's slip, and within a round the active set
@@ -524,7 +524,7 @@ def _lu_solve(A: np.ndarray, B: np.ndarray) -> bool:
 
 @njit(cache=True)
 def _rebuild(s: ZoneSolver, dofs: np.ndarray, coefficients: np.ndarray) -> bool:
-    """Form M for these free displacements and invert it (LAPACK); False if singular."""
+    """Form M for these free displacements and invert it; False if singular."""
     m = dofs.size
     for d in range(s.position.size):
         s.position[d] = -1
@@ -711,33 +711,19 @@ def _inverse_times(s: ZoneSolver, b: np.ndarray) -> np.ndarray:
 
 @njit(cache=True, fastmath=FAST)
 def _apply_inverse(s: ZoneSolver, rhs: np.ndarray, count: int, m: int) -> np.ndarray:
-    """The inverse times ``rhs[k]`` for the first ``count`` rows of rhs, one pass over it."""
+    """The inverse times ``rhs[k]`` for the first ``count`` rows of rhs.
+
+    Once per increment and per refinement: written for a short compilation rather than
+    for speed.
+    """
     B = s.inverse
     out = np.zeros((count, m))
-    if count == 1:
-        for a in range(m):
+    for a in range(m):
+        for k in range(count):
             total = 0.0
             for c in range(m):
-                total += B[a, c] * rhs[0, c]
-            out[0, a] = total
-    elif count == 2:
-        for a in range(m):
-            t0 = t1 = 0.0
-            for c in range(m):
-                t0 += B[a, c] * rhs[0, c]
-                t1 += B[a, c] * rhs[1, c]
-            out[0, a] = t0
-            out[1, a] = t1
-    else:
-        for a in range(m):
-            t0 = t1 = t2 = 0.0
-            for c in range(m):
-                t0 += B[a, c] * rhs[0, c]
-                t1 += B[a, c] * rhs[1, c]
-                t2 += B[a, c] * rhs[2, c]
-            out[0, a] = t0
-            out[1, a] = t1
-            out[2, a] = t2
+                total += B[a, c] * rhs[k, c]
+            out[k, a] = total
     for j in range(s.counts[PENDING]):
         u, v = s.pending_u[j], s.pending_v[j]
         for k in range(count):
@@ -750,18 +736,17 @@ def _apply_inverse(s: ZoneSolver, rhs: np.ndarray, count: int, m: int) -> np.nda
 
 
 @njit(cache=True)
-def _schur_solve(s: ZoneSolver, fl: Flat, inverse_b: np.ndarray, flat_rhs: np.ndarray,
-                 totals: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Solve ``[M F; G H] [z; f] = [b; flat_rhs]`` with the kept inverse of M.
+def _flat_system(s: ZoneSolver, fl: Flat, totals: np.ndarray
+                 ) -> tuple[np.ndarray, int, np.ndarray, bool]:
+    """The flat's unknown motions and the Schur complement that eliminates them.
 
-    ``inverse_b`` is the inverse of M times b. f holds the unknown flat motions (dx,
-    then dy, as unknown); their equations are T's then N's; F's columns are the
-    terms of the stuck x (dx) and contact y (dy), whose products with the inverse are
-    the kept responses 1 and 2. Returns z, f (2,: dx and dy parts, zero where given)
-    and whether the flat's 2 x 2 was regular.
+    Returns which motions are unknown (0: dx, with T's equation; 1: dy, with N's), how
+    many, their 2 x 2 complement and whether it is regular. Its columns come from the
+    kept responses 1 and 2: the inverse times the terms of the stuck x (dx) and of the
+    contact y (dy).
     """
-    m = inverse_b.size
-    which = np.empty(2, dtype=np.int64)  # 0: dx (T equation), 1: dy (N equation)
+    m = s.counts[SIZE]
+    which = np.zeros(2, dtype=np.int64)
     count = 0
     if fl.dx_unknown:
         which[count] = 0
@@ -769,48 +754,57 @@ def _schur_solve(s: ZoneSolver, fl: Flat, inverse_b: np.ndarray, flat_rhs: np.nd
     if fl.dy_unknown:
         which[count] = 1
         count += 1
-    solved = np.empty((1 + count, m))
-    _copy(solved[0], inverse_b)
-    for k in range(count):
-        for p in range(m):
-            solved[1 + k, p] = s.responses[1 + which[k], p]
-    z = np.empty(m)
-    _copy(z, inverse_b)
-    motion = np.zeros(2)
+    S = np.zeros((2, 2))
+    for e in range(count):
+        totals_row = s.sum_x if which[e] == 0 else s.sum_y
+        for k in range(count):
+            value = totals[1 + which[k], which[e]]
+            if which[e] == 0 and which[k] == 0:
+                value += fl.values[4]  # the machine's spring
+            response = 1 + which[k]
+            for p in range(m):
+                value -= totals_row[s.dofs[p]] * s.responses[response, p]
+            S[e, k] = value
+    regular = True
+    if count == 1:
+        regular = S[0, 0] != 0.0 and np.isfinite(S[0, 0])
+    elif count == 2:
+        det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+        scale = abs(S[0, 0] * S[1, 1]) + abs(S[0, 1] * S[1, 0])
+        regular = np.isfinite(det) and abs(det) > 1e-14 * scale
+    return which, count, S, regular
+
+
+@njit(cache=True)
+def _flat_motion(s: ZoneSolver, which: np.ndarray, count: int, S: np.ndarray,
+                 z: np.ndarray, flat_rhs: np.ndarray, motion: np.ndarray) -> None:
+    """Eliminate the flat's motion: z, the inverse times b on entry, corrected in place.
+
+    ``motion`` receives the dx and dy parts (zero where given); S must be regular.
+    """
+    m = z.size
+    motion[0] = motion[1] = 0.0
     if count == 0:
-        return z, motion, True
-    S = np.empty((2, 2))
-    flat = np.empty(2)
+        return
+    flat = np.zeros(2)
     for e in range(count):
         totals_row = s.sum_x if which[e] == 0 else s.sum_y
         value = flat_rhs[which[e]]
         for p in range(m):
             value -= totals_row[s.dofs[p]] * z[p]
         flat[e] = value
-        for k in range(count):
-            value = totals[1 + which[k], which[e]]
-            if which[e] == 0 and which[k] == 0:
-                value += fl.values[4]  # the machine's spring
-            for p in range(m):
-                value -= totals_row[s.dofs[p]] * solved[1 + k, p]
-            S[e, k] = value
-    f = np.empty(2)
+    f = np.zeros(2)
     if count == 1:
-        if S[0, 0] == 0.0 or not np.isfinite(S[0, 0]):
-            return z, motion, False
         f[0] = flat[0] / S[0, 0]
     else:
         det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
-        scale = abs(S[0, 0] * S[1, 1]) + abs(S[0, 1] * S[1, 0])
-        if not (np.isfinite(det) and abs(det) > 1e-14 * scale):
-            return z, motion, False
         f[0] = (flat[0] * S[1, 1] - S[0, 1] * flat[1]) / det
         f[1] = (S[0, 0] * flat[1] - S[1, 0] * flat[0]) / det
     for k in range(count):
         motion[which[k]] = f[k]
+        response = 1 + which[k]
         for p in range(m):
-            z[p] -= solved[1 + k, p] * f[k]
-    return z, motion, True
+            z[p] -= s.responses[response, p] * f[k]
 
 
 @njit(cache=True)
@@ -874,29 +868,6 @@ def _residuals(s: ZoneSolver, fl: Flat, r: np.ndarray, dx: float
 
 
 @njit(cache=True)
-def _solve_once(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray
-                ) -> tuple[float, float, np.ndarray, bool]:
-    m = s.counts[SIZE]
-    given_dx = 0.0 if fl.dx_unknown else fl.values[0]
-    given_dy = 0.0 if fl.dy_unknown else fl.values[1]
-    totals = _totals(s)
-    y = s.responses
-    inverse_b = np.empty(m)  # of b = -(terms 0 + dx terms 1 + dy terms 2), dx, dy given
-    for p in range(m):
-        inverse_b[p] = -(y[0, p] + given_dx * y[1, p] + given_dy * y[2, p])
-    flat_rhs = np.zeros(2)
-    if fl.dx_unknown:  # T = sum Q + machine dx
-        flat_rhs[0] = fl.values[2] - totals[0, 0] - given_dy * totals[2, 0]
-    if fl.dy_unknown:
-        flat_rhs[1] = fl.values[3] - totals[0, 1] - given_dx * totals[1, 1]
-    z, motion, regular = _schur_solve(s, fl, inverse_b, flat_rhs, totals)
-    dx = motion[0] if fl.dx_unknown else given_dx
-    dy = motion[1] if fl.dy_unknown else given_dy
-    _assemble(s, z, dx, dy, u, r)
-    return dx, dy, z, regular
-
-
-@njit(cache=True)
 def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float, float, bool]:
     """Solve the kept zone state for the flat's prescribed motion or loads.
 
@@ -917,41 +888,59 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
 
     """
     s.counts[SOLVES] += 1
-    dx, dy, z, regular = _solve_once(s, fl, u, r)
-    if not regular:
-        return dx, dy, False
-    rows, flat_rows, relative = _residuals(s, fl, r, dx)
-    if relative <= REFINE_ABOVE:
-        return dx, dy, True
-    # one step of iterative refinement: the same system for the residual
-    s.counts[REFINEMENTS] += 1
-    m = s.counts[SIZE]
-    for p in range(m):
-        rows[p] = -rows[p]
-    for k in range(2):
-        flat_rows[k] = -flat_rows[k]
-    correction, motion, regular = _schur_solve(s, fl, _inverse_times(s, rows), flat_rows,
-                                               _totals(s))
-    if regular:
+    given_dx = 0.0 if fl.dx_unknown else fl.values[0]
+    given_dy = 0.0 if fl.dy_unknown else fl.values[1]
+    dx, dy = given_dx, given_dy
+    motion = np.zeros(2)
+    for attempt in range(2):  # the second with the inverse formed afresh
+        m = s.counts[SIZE]
+        totals = _totals(s)
+        which, count, S, regular = _flat_system(s, fl, totals)
+        y = s.responses
+        z = np.empty(m)  # the inverse times b = -(terms 0 + dx terms 1 + dy terms 2)
+        for p in range(m):
+            z[p] = -(y[0, p] + given_dx * y[1, p] + given_dy * y[2, p])
+        flat_rhs = np.zeros(2)
+        if fl.dx_unknown:  # T = sum Q + machine dx
+            flat_rhs[0] = fl.values[2] - totals[0, 0] - given_dy * totals[2, 0]
+        if fl.dy_unknown:
+            flat_rhs[1] = fl.values[3] - totals[0, 1] - given_dx * totals[1, 1]
+        motion[0] = motion[1] = 0.0
+        if regular:
+            _flat_motion(s, which, count, S, z, flat_rhs, motion)
+        dx = motion[0] if fl.dx_unknown else given_dx
+        dy = motion[1] if fl.dy_unknown else given_dy
+        _assemble(s, z, dx, dy, u, r)
+        if attempt == 1 or not regular:
+            return dx, dy, regular
+        rows, flat_rows, relative = _residuals(s, fl, r, dx)
+        if relative <= REFINE_ABOVE:
+            return dx, dy, True
+        # one step of iterative refinement: the same system for the residual
+        s.counts[REFINEMENTS] += 1
+        for p in range(m):
+            rows[p] = -rows[p]
+        for k in range(2):
+            flat_rows[k] = -flat_rows[k]
+        correction = _inverse_times(s, rows)
+        _flat_motion(s, which, count, S, correction, flat_rows, motion)
         for p in range(m):
             z[p] += correction[p]
         dx += motion[0]
         dy += motion[1]
         _assemble(s, z, dx, dy, u, r)
-        relative = _residuals(s, fl, r, dx)[2]
-        if relative <= REFINE_ABOVE:
+        if _residuals(s, fl, r, dx)[2] <= REFINE_ABOVE:
             _refresh_responses(s)  # their updates' rounding, cleared for the next solves
             return dx, dy, True
-    # the updates have lost accuracy: the inverse afresh
-    dofs = np.empty(m, dtype=np.int64)
-    coefficients = np.empty(m)
-    for p in range(m):
-        dofs[p] = s.dofs[p]
-        coefficients[p] = s.coefficient[p]
-    if not _rebuild(s, dofs, coefficients):
-        return dx, dy, False
-    dx, dy, z, regular = _solve_once(s, fl, u, r)
-    return dx, dy, regular
+        # the updates have lost accuracy: the inverse afresh
+        dofs = np.empty(m, dtype=np.int64)
+        coefficients = np.empty(m)
+        for p in range(m):
+            dofs[p] = s.dofs[p]
+            coefficients[p] = s.coefficient[p]
+        if not _rebuild(s, dofs, coefficients):
+            return dx, dy, False
+    return dx, dy, False
 
 
 @njit(cache=True)
@@ -982,12 +971,23 @@ def slip_sensitivity(s: ZoneSolver, fl: Flat, state: np.ndarray, pressure: np.nd
     m = s.counts[SIZE]
     slipping = _slipping(state)
     k = slipping.size
-    totals = _totals(s)
+    which, count, S, regular = _flat_system(s, fl, _totals(s))
     sensitivity = np.empty((k, k))
+    dz = np.empty(m)
+    motion = np.zeros(2)
+    no_load = np.zeros(2)
+    B = s.inverse
     for column in range(k):
-        b = np.zeros(m)
-        b[s.position[slipping[column]]] = pressure[slipping[column]]
-        dz, motion, _ = _schur_solve(s, fl, _inverse_times(s, b), np.zeros(2), totals)
+        q = s.position[slipping[column]]
+        source = pressure[slipping[column]]
+        for a in range(m):  # the inverse's column q (with its pending terms), times P
+            dz[a] = B[a, q] * source
+        for j in range(s.counts[PENDING]):
+            factor = s.pending_v[j, q] * source
+            for a in range(m):
+                dz[a] += s.pending_u[j, a] * factor
+        if regular:
+            _flat_motion(s, which, count, S, dz, no_load, motion)
         for j in range(k):
             sensitivity[j, column] = dz[s.position[slipping[j]]] - motion[0]
     return sensitivity
@@ -1267,85 +1267,34 @@ def _weakening_newton(s: ZoneSolver, fl: Flat, state: np.ndarray, mu: np.ndarray
 
 
 @njit(cache=True)
-def _settle(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, limit: np.ndarray,
-            in_wave: np.ndarray, cascade: bool, first: bool, rounds: np.ndarray,
-            wave_limit: np.ndarray, state: np.ndarray, sign: np.ndarray,
-            round_slipped: np.ndarray, u: np.ndarray, r: np.ndarray, mu: np.ndarray,
-            work: np.ndarray, flat_position: np.ndarray) -> int:
-    """Settle one round's active set: the iterations it took, -1 (cycling), -2 (singular).
-
-    ``rounds[0]`` is the round; ``flat_position`` receives dx and dy.
-    """
-    n = s_prev.size
-    new = np.empty(n, dtype=np.int8)
-    new_sign = np.empty(n)
-    slipping = np.empty(n, dtype=np.bool_)
-    # the states seen, kept once a round takes a second iteration (most take one)
-    seen_states = np.empty((0, n), dtype=np.int8)
-    seen_signs = np.empty((0, n))
-    seen = 0
-    for iteration in range(1, MAX_ITERATIONS + 1):
-        for i in range(n):
-            mu[i] = limit[i] * sign[i]
-        if not move_to(s, state, mu):
-            return -2
-        dx, dy, regular = solve(s, fl, u, r)
-        if not regular:
-            return -2
-        flat_position[0] = dx
-        flat_position[1] = dy
-        _classify(s, u, r, dx, dy, s_prev, limit, in_wave, cascade, work, new, slipping)
-        if first:
-            _predict(state, new, slipping, work, in_wave, cascade)
-            first = False
-        for i in range(n):
-            if slipping[i]:
-                new[i] = SLIP
-        if fl.dx_unknown and fl.values[4] == 0.0:
-            _keep_one_stuck(new, slipping, work)
-        # (a frictionless slip carries no shear: its sign changes nothing)
-        for i in range(n):
-            new_sign[i] = np.sign(work[4, i]) if slipping[i] and limit[i] > 0 else sign[i]
-        if _same(new, state) and _same(new_sign, sign):
-            return iteration
-        if seen_states.shape[0] == 0:
-            seen_states = np.empty((MAX_ITERATIONS + 1, n), dtype=np.int8)
-            seen_signs = np.empty((MAX_ITERATIONS + 1, n))
-        repeated = _seen(seen_states, seen_signs, seen, new, new_sign)
-        _copy(seen_states[seen if not repeated else 0], new)
-        _copy(seen_signs[seen if not repeated else 0], new_sign)
-        seen = 1 if repeated else seen + 1
-        if repeated:
-            # A cycle: nodes at the edge of the contact flip between stuck in tension
-            # and open in penetration. They are in contact with a vanishing pressure,
-            # so any shear exceeds f P: they slide (and, in a cascade, join the wave).
-            for i in range(n):
-                if new[i] != state[i]:
-                    if cascade and not in_wave[i]:
-                        in_wave[i] = True
-                        round_slipped[i] = rounds[0]
-                        limit[i] = wave_limit[i]
-                    new[i] = SLIP
-                    new_sign[i] = -1.0 if work[4, i] < 0 else 1.0
-        _copy(state, new)
-        _copy(sign, new_sign)
-    return -1
-
-
-@njit(cache=True)
-def _iterate(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, static: float, dynamic: float,
-            law: np.ndarray, guess: np.ndarray, guess_sign: np.ndarray, heal: bool,
-            u: np.ndarray, r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray,
-            state: np.ndarray, sign: np.ndarray, round_slipped: np.ndarray,
-            scalars: np.ndarray) -> int:
+def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
+            sum_y: np.ndarray, inverse: np.ndarray, columns: np.ndarray,
+            coefficient: np.ndarray, known: np.ndarray, base: np.ndarray,
+            dofs: np.ndarray, position: np.ndarray, counts: np.ndarray,
+            pending_u: np.ndarray, pending_v: np.ndarray, responses: np.ndarray,
+            flat_values: np.ndarray, dx_unknown: bool, dy_unknown: bool,
+            s_prev: np.ndarray, static: float, dynamic: float, law: np.ndarray,
+            guess: np.ndarray, guess_sign: np.ndarray, heal: bool, u: np.ndarray,
+            r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray, state: np.ndarray,
+            sign: np.ndarray, round_slipped: np.ndarray, scalars: np.ndarray) -> int:
     """Solve one increment by the active set, with the cascade when fs > fd.
 
-    Called through :func:`iterate`. Parameters
+    The body's :class:`ZoneSolver` and the increment's :class:`Flat` come as their
+    fields: numba reads plain arrays from Python several times faster than named
+    tuples of them, and an increment is a call from Python. The round's settling is
+    written here too: each level of calls between compiled functions has LLVM
+    optimise its callees' code again, and a wrapper and a settling function of their
+    own made the compilation about 10 s longer (45 s against 35 s).
+
+    Parameters
     ----------
-    s
-        The body's solver (its kept inverse is moved along).
-    fl
-        What is prescribed of the flat.
+    K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base, dofs, position
+        The fields of the body's :class:`ZoneSolver`, in order; its kept inverse is
+        moved along.
+    counts, pending_u, pending_v, responses
+        Its last fields.
+    flat_values, dx_unknown, dy_unknown
+        The fields of the increment's :class:`Flat`.
     s_prev
         ``ux - dx`` of every node at the end of the previous increment.
     static, dynamic
@@ -1371,6 +1320,9 @@ def _iterate(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, static: float, dynamic
         :data:`CONVERGED`, or the reason it did not (:data:`FAILURES`).
 
     """
+    s = ZoneSolver(K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base,
+                   dofs, position, counts, pending_u, pending_v, responses)
+    fl = Flat(flat_values, dx_unknown, dy_unknown)
     n = s_prev.size
     cascade = static > dynamic
     weakening = law.size == 3 and cascade
@@ -1390,6 +1342,11 @@ def _iterate(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, static: float, dynamic
         wave_limit[i] = dynamic
     mu = np.empty(n)
     work = np.empty((6, n))  # Q, P, gap, ds, trial, bound
+    new = np.empty(n, dtype=np.int8)  # each iteration's next guess
+    new_sign = np.empty(n)
+    slipping = np.empty(n, dtype=np.bool_)
+    seen_states = np.empty((0, n), dtype=np.int8)  # the guesses of a round's iterations
+    seen_signs = np.empty((0, n))
     flat_position = np.zeros(2)
     history = np.empty((3, n))
     kept = 0  # of history
@@ -1401,9 +1358,59 @@ def _iterate(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, static: float, dynamic
     while True:
         for i in range(n):
             limit[i] = wave_limit[i] if in_wave[i] else static
-        taken = _settle(s, fl, s_prev, limit, in_wave, cascade, rounds[0] == 0, rounds,
-                        wave_limit, state, sign, round_slipped, u, r, mu, work,
-                        flat_position)
+        # The round's active set settles.
+        taken = -1  # the iterations it took; -1: still cycling, -2: a singular state
+        first = rounds[0] == 0
+        seen = 0
+        for iteration in range(1, MAX_ITERATIONS + 1):
+            for i in range(n):
+                mu[i] = limit[i] * sign[i]
+            if not move_to(s, state, mu):
+                taken = -2
+                break
+            dx, dy, regular = solve(s, fl, u, r)
+            if not regular:
+                taken = -2
+                break
+            flat_position[0] = dx
+            flat_position[1] = dy
+            _classify(s, u, r, dx, dy, s_prev, limit, in_wave, cascade, work, new, slipping)
+            if first:
+                _predict(state, new, slipping, work, in_wave, cascade)
+                first = False
+            for i in range(n):
+                if slipping[i]:
+                    new[i] = SLIP
+            if fl.dx_unknown and fl.values[4] == 0.0:
+                _keep_one_stuck(new, slipping, work)
+            # (a frictionless slip carries no shear: its sign changes nothing)
+            for i in range(n):
+                new_sign[i] = np.sign(work[4, i]) if slipping[i] and limit[i] > 0 else sign[i]
+            if _same(new, state) and _same(new_sign, sign):
+                taken = iteration
+                break
+            if seen_states.shape[0] == 0:  # kept once a round takes a second iteration
+                seen_states = np.empty((MAX_ITERATIONS + 1, n), dtype=np.int8)
+                seen_signs = np.empty((MAX_ITERATIONS + 1, n))
+            repeated = _seen(seen_states, seen_signs, seen, new, new_sign)
+            _copy(seen_states[seen if not repeated else 0], new)
+            _copy(seen_signs[seen if not repeated else 0], new_sign)
+            seen = 1 if repeated else seen + 1
+            if repeated:
+                # A cycle: nodes at the edge of the contact flip between stuck in
+                # tension and open in penetration. They are in contact with a vanishing
+                # pressure, so any shear exceeds f P: they slide (and, in a cascade,
+                # join the wave).
+                for i in range(n):
+                    if new[i] != state[i]:
+                        if cascade and not in_wave[i]:
+                            in_wave[i] = True
+                            round_slipped[i] = rounds[0]
+                            limit[i] = wave_limit[i]
+                        new[i] = SLIP
+                        new_sign[i] = -1.0 if work[4, i] < 0 else 1.0
+            _copy(state, new)
+            _copy(sign, new_sign)
         if taken == -1:
             return CYCLING
         if taken == -2:
@@ -1473,45 +1480,3 @@ def _iterate(s: ZoneSolver, fl: Flat, s_prev: np.ndarray, static: float, dynamic
         _copy(u_before, u)
         _copy(r_before, r)
     return CONVERGED
-
-
-@njit(cache=True)
-def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
-            sum_y: np.ndarray, inverse: np.ndarray, columns: np.ndarray,
-            coefficient: np.ndarray, known: np.ndarray, base: np.ndarray,
-            dofs: np.ndarray, position: np.ndarray, counts: np.ndarray,
-            pending_u: np.ndarray, pending_v: np.ndarray, responses: np.ndarray,
-            flat_values: np.ndarray, dx_unknown: bool, dy_unknown: bool,
-            s_prev: np.ndarray, static: float, dynamic: float, law: np.ndarray,
-            guess: np.ndarray, guess_sign: np.ndarray, heal: bool, u: np.ndarray,
-            r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray, state: np.ndarray,
-            sign: np.ndarray, round_slipped: np.ndarray, scalars: np.ndarray) -> int:
-    """:func:`_iterate` for a :class:`ZoneSolver` and a :class:`Flat` given by their fields.
-
-    numba reads plain arrays from Python several times faster than named tuples of
-    them; an increment is a call from Python.
-
-    Parameters
-    ----------
-    K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base, dofs, position
-        The fields of the body's :class:`ZoneSolver`, in order.
-    counts, pending_u, pending_v, responses
-        Its last fields.
-    flat_values, dx_unknown, dy_unknown
-        The fields of the increment's :class:`Flat`.
-    s_prev, static, dynamic, law, guess, guess_sign, heal
-        As in :func:`_iterate`.
-    u, r, u_before, r_before, state, sign, round_slipped, scalars
-        Filled as in :func:`_iterate`.
-
-    Returns
-    -------
-    int
-        :data:`CONVERGED`, or the reason it did not (:data:`FAILURES`).
-
-    """
-    s = ZoneSolver(K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base,
-                   dofs, position, counts, pending_u, pending_v, responses)
-    return _iterate(s, Flat(flat_values, dx_unknown, dy_unknown), s_prev, static, dynamic,
-                    law, guess, guess_sign, heal, u, r, u_before, r_before, state, sign,
-                    round_slipped, scalars)
