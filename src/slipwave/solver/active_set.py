@@ -234,23 +234,23 @@ def _equation_entry(K: np.ndarray, dof: int, coefficient: float, column: int) ->
 
 
 @njit(cache=True)
-def _known_values(s: ZoneSolver, dof: int) -> np.ndarray:
+def _known_values(base: np.ndarray, dof: int) -> np.ndarray:
     """A known displacement's value in each known product: its base, x or y indicator."""
     values = np.zeros(3)
-    values[0] = s.base[dof]
-    values[1 if dof < s.g0.size else 2] = 1.0
+    values[0] = base[dof]
+    values[1 if dof < base.size // 2 else 2] = 1.0
     return values
 
 
 @njit(cache=True)
-def _row_terms(s: ZoneSolver, dof: int, coefficient: float) -> np.ndarray:
+def _row_terms(known: np.ndarray, dof: int, coefficient: float) -> np.ndarray:
     """Equation ``K[dof] - coefficient K[n + dof]`` applied to each known product."""
-    n = s.g0.size
+    n = known.shape[1] // 2
     terms = np.empty(3)
     for k in range(3):
-        terms[k] = s.known[k, dof]
+        terms[k] = known[k, dof]
         if coefficient != 0.0:
-            terms[k] -= coefficient * s.known[k, n + dof]
+            terms[k] -= coefficient * known[k, n + dof]
     return terms
 
 
@@ -265,15 +265,20 @@ def _refresh_responses(s: ZoneSolver) -> None:
 
 
 @njit(cache=True)
-def _release(s: ZoneSolver, dof: int, sign: float) -> None:
-    """Take displacement ``dof`` out of the known ones (sign -1) or back in (+1)."""
-    n = s.g0.size
-    column = s.KT[dof]
-    which = 1 if dof < n else 2
-    value = s.base[dof]
-    for k in range(2 * n):
-        s.known[0, k] += sign * value * column[k]
-        s.known[which, k] += sign * column[k]
+def _release(KT: np.ndarray, known: np.ndarray, base: np.ndarray, dof: int,
+             sign: float) -> None:
+    """Take displacement ``dof`` out of the known ones (sign -1) or back in (+1).
+
+    (The solver's arrays are passed one by one, here as in the other small kernels
+    called on every iteration: a call taking the whole :class:`ZoneSolver`
+    reference-counts each of its arrays on the way in and out.)
+    """
+    n2 = base.size
+    which = 1 if dof < n2 // 2 else 2
+    value = base[dof]
+    for k in range(n2):
+        known[0, k] += sign * value * KT[dof, k]
+        known[which, k] += sign * KT[dof, k]
 
 
 @njit(cache=True, fastmath=FAST)
@@ -340,7 +345,7 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
         return False
     # the responses: the bordered inverse applied to the terms, which lose the new
     # column times the displacement's known value (it is free now) and gain a row
-    values = _known_values(s, dof)
+    values = _known_values(s.base, dof)
     row_responses = np.zeros(3)
     for k in range(3):
         for p in range(m):
@@ -365,8 +370,8 @@ def _add(s: ZoneSolver, dof: int, coefficient: float) -> bool:
     _copy(s.columns[m], s.KT[dof])
     s.counts[SIZE] = m + 1
     s.counts[ADDED] += 1
-    _release(s, dof, -1.0)
-    new_terms = _row_terms(s, dof, coefficient)
+    _release(s.KT, s.known, s.base, dof, -1.0)
+    new_terms = _row_terms(s.known, dof, coefficient)
     for k in range(3):
         w = (new_terms[k] + values[k] * corner - row_responses[k]) / pivot
         y = s.responses[k]
@@ -404,7 +409,7 @@ def _remove(s: ZoneSolver, p: int) -> bool:
     pivot = B[last, last]
     dof = s.dofs[last]
     # the responses of the reduced inverse, the terms gaining the fixed column
-    values = _known_values(s, dof)
+    values = _known_values(s.base, dof)
     for k in range(3):
         y = s.responses[k]
         w = (y[last] + values[k]) / pivot
@@ -417,7 +422,7 @@ def _remove(s: ZoneSolver, p: int) -> bool:
     s.position[dof] = -1
     s.counts[SIZE] = last
     s.counts[REMOVED] += 1
-    _release(s, dof, 1.0)
+    _release(s.KT, s.known, s.base, dof, 1.0)
     return True
 
 
@@ -682,21 +687,21 @@ def _flat_terms(s: ZoneSolver, m: int) -> np.ndarray:
     """The known vectors' part in the equations: ``E_p @ v`` for rows 0 (values) 1, 2."""
     terms = np.empty((3, m))
     for p in range(m):
-        row = _row_terms(s, s.dofs[p], s.coefficient[p])
+        row = _row_terms(s.known, s.dofs[p], s.coefficient[p])
         for k in range(3):
             terms[k, p] = row[k]
     return terms
 
 
 @njit(cache=True)
-def _totals(s: ZoneSolver) -> np.ndarray:
+def _totals(known: np.ndarray) -> np.ndarray:
     """Each known product summed over the x rows (T) and over the y rows (N)."""
-    n = s.g0.size
+    n = known.shape[1] // 2
     totals = np.zeros((3, 2))
     for k in range(3):
         for i in range(n):
-            totals[k, 0] += s.known[k, i]
-            totals[k, 1] += s.known[k, n + i]
+            totals[k, 0] += known[k, i]
+            totals[k, 1] += known[k, n + i]
     return totals
 
 
@@ -736,16 +741,16 @@ def _apply_inverse(s: ZoneSolver, rhs: np.ndarray, count: int, m: int) -> np.nda
 
 
 @njit(cache=True)
-def _flat_system(s: ZoneSolver, fl: Flat, totals: np.ndarray
+def _flat_system(sum_x: np.ndarray, sum_y: np.ndarray, dofs: np.ndarray,
+                 responses: np.ndarray, m: int, fl: Flat, totals: np.ndarray
                  ) -> tuple[np.ndarray, int, np.ndarray, bool]:
     """The flat's unknown motions and the Schur complement that eliminates them.
 
     Returns which motions are unknown (0: dx, with T's equation; 1: dy, with N's), how
     many, their 2 x 2 complement and whether it is regular. Its columns come from the
     kept responses 1 and 2: the inverse times the terms of the stuck x (dx) and of the
-    contact y (dy).
+    contact y (dy), for the m free displacements ``dofs``.
     """
-    m = s.counts[SIZE]
     which = np.zeros(2, dtype=np.int64)
     count = 0
     if fl.dx_unknown:
@@ -756,14 +761,14 @@ def _flat_system(s: ZoneSolver, fl: Flat, totals: np.ndarray
         count += 1
     S = np.zeros((2, 2))
     for e in range(count):
-        totals_row = s.sum_x if which[e] == 0 else s.sum_y
+        totals_row = sum_x if which[e] == 0 else sum_y
         for k in range(count):
             value = totals[1 + which[k], which[e]]
             if which[e] == 0 and which[k] == 0:
                 value += fl.values[4]  # the machine's spring
             response = 1 + which[k]
             for p in range(m):
-                value -= totals_row[s.dofs[p]] * s.responses[response, p]
+                value -= totals_row[dofs[p]] * responses[response, p]
             S[e, k] = value
     regular = True
     if count == 1:
@@ -776,7 +781,8 @@ def _flat_system(s: ZoneSolver, fl: Flat, totals: np.ndarray
 
 
 @njit(cache=True)
-def _flat_motion(s: ZoneSolver, which: np.ndarray, count: int, S: np.ndarray,
+def _flat_motion(sum_x: np.ndarray, sum_y: np.ndarray, dofs: np.ndarray,
+                 responses: np.ndarray, which: np.ndarray, count: int, S: np.ndarray,
                  z: np.ndarray, flat_rhs: np.ndarray, motion: np.ndarray) -> None:
     """Eliminate the flat's motion: z, the inverse times b on entry, corrected in place.
 
@@ -788,10 +794,10 @@ def _flat_motion(s: ZoneSolver, which: np.ndarray, count: int, S: np.ndarray,
         return
     flat = np.zeros(2)
     for e in range(count):
-        totals_row = s.sum_x if which[e] == 0 else s.sum_y
+        totals_row = sum_x if which[e] == 0 else sum_y
         value = flat_rhs[which[e]]
         for p in range(m):
-            value -= totals_row[s.dofs[p]] * z[p]
+            value -= totals_row[dofs[p]] * z[p]
         flat[e] = value
     f = np.zeros(2)
     if count == 1:
@@ -804,25 +810,27 @@ def _flat_motion(s: ZoneSolver, which: np.ndarray, count: int, S: np.ndarray,
         motion[which[k]] = f[k]
         response = 1 + which[k]
         for p in range(m):
-            z[p] -= s.responses[response, p] * f[k]
+            z[p] -= responses[response, p] * f[k]
 
 
 @njit(cache=True)
-def _assemble(s: ZoneSolver, z: np.ndarray, dx: float, dy: float,
-              u: np.ndarray, r: np.ndarray) -> None:
-    """Fill u, and r = K u, from the free displacements z and the flat's position."""
-    n = s.g0.size
+def _assemble(base: np.ndarray, known: np.ndarray, dofs: np.ndarray, C: np.ndarray,
+              z: np.ndarray, dx: float, dy: float, u: np.ndarray, r: np.ndarray) -> None:
+    """Fill u, and r = K u, from the free displacements z and the flat's position.
+
+    ``base``, ``known``, ``dofs`` and ``C`` (the free columns) are the solver's.
+    """
+    n = base.size // 2
     for i in range(n):
-        u[i] = s.base[i] + dx
-        u[n + i] = s.base[n + i] + dy
+        u[i] = base[i] + dx
+        u[n + i] = base[n + i] + dy
     m = z.size
     for p in range(m):
-        u[s.dofs[p]] = z[p]
+        u[dofs[p]] = z[p]
     for k in range(2 * n):
-        r[k] = s.known[0, k] + dx * s.known[1, k] + dy * s.known[2, k]
+        r[k] = known[0, k] + dx * known[1, k] + dy * known[2, k]
     # four columns per pass over r: a quarter of its loads and stores
     # (indexed in two dimensions: a row taken as an array would be reference-counted)
-    C = s.columns
     p = 0
     while p + 4 <= m:
         z0, z1, z2, z3 = z[p], z[p + 1], z[p + 2], z[p + 3]
@@ -837,16 +845,15 @@ def _assemble(s: ZoneSolver, z: np.ndarray, dx: float, dy: float,
 
 
 @njit(cache=True)
-def _residuals(s: ZoneSolver, fl: Flat, r: np.ndarray, dx: float
-               ) -> tuple[np.ndarray, np.ndarray, float]:
+def _residuals(dofs: np.ndarray, coefficient: np.ndarray, m: int, fl: Flat,
+               r: np.ndarray, dx: float) -> tuple[np.ndarray, np.ndarray, float]:
     """The equations' residuals (free rows; T, N) and their largest, relative."""
-    n = s.g0.size
-    m = s.counts[SIZE]
+    n = r.size // 2
     rows = np.empty(m)
     worst = 0.0
     for p in range(m):
-        d = s.dofs[p]
-        rows[p] = r[d] - s.coefficient[p] * r[n + d] if s.coefficient[p] != 0.0 else r[d]
+        d = dofs[p]
+        rows[p] = r[d] - coefficient[p] * r[n + d] if coefficient[p] != 0.0 else r[d]
         worst = max(worst, abs(rows[p]))
     flat_rows = np.zeros(2)
     if fl.dx_unknown:
@@ -894,8 +901,9 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
     motion = np.zeros(2)
     for attempt in range(2):  # the second with the inverse formed afresh
         m = s.counts[SIZE]
-        totals = _totals(s)
-        which, count, S, regular = _flat_system(s, fl, totals)
+        totals = _totals(s.known)
+        which, count, S, regular = _flat_system(s.sum_x, s.sum_y, s.dofs, s.responses, m,
+                                                fl, totals)
         y = s.responses
         z = np.empty(m)  # the inverse times b = -(terms 0 + dx terms 1 + dy terms 2)
         for p in range(m):
@@ -907,13 +915,14 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
             flat_rhs[1] = fl.values[3] - totals[0, 1] - given_dx * totals[1, 1]
         motion[0] = motion[1] = 0.0
         if regular:
-            _flat_motion(s, which, count, S, z, flat_rhs, motion)
+            _flat_motion(s.sum_x, s.sum_y, s.dofs, s.responses, which, count, S, z,
+                             flat_rhs, motion)
         dx = motion[0] if fl.dx_unknown else given_dx
         dy = motion[1] if fl.dy_unknown else given_dy
-        _assemble(s, z, dx, dy, u, r)
+        _assemble(s.base, s.known, s.dofs, s.columns, z, dx, dy, u, r)
         if attempt == 1 or not regular:
             return dx, dy, regular
-        rows, flat_rows, relative = _residuals(s, fl, r, dx)
+        rows, flat_rows, relative = _residuals(s.dofs, s.coefficient, m, fl, r, dx)
         if relative <= REFINE_ABOVE:
             return dx, dy, True
         # one step of iterative refinement: the same system for the residual
@@ -923,13 +932,14 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
         for k in range(2):
             flat_rows[k] = -flat_rows[k]
         correction = _inverse_times(s, rows)
-        _flat_motion(s, which, count, S, correction, flat_rows, motion)
+        _flat_motion(s.sum_x, s.sum_y, s.dofs, s.responses, which, count, S,
+                     correction, flat_rows, motion)
         for p in range(m):
             z[p] += correction[p]
         dx += motion[0]
         dy += motion[1]
-        _assemble(s, z, dx, dy, u, r)
-        if _residuals(s, fl, r, dx)[2] <= REFINE_ABOVE:
+        _assemble(s.base, s.known, s.dofs, s.columns, z, dx, dy, u, r)
+        if _residuals(s.dofs, s.coefficient, m, fl, r, dx)[2] <= REFINE_ABOVE:
             _refresh_responses(s)  # their updates' rounding, cleared for the next solves
             return dx, dy, True
         # the updates have lost accuracy: the inverse afresh
@@ -971,7 +981,8 @@ def slip_sensitivity(s: ZoneSolver, fl: Flat, state: np.ndarray, pressure: np.nd
     m = s.counts[SIZE]
     slipping = _slipping(state)
     k = slipping.size
-    which, count, S, regular = _flat_system(s, fl, _totals(s))
+    which, count, S, regular = _flat_system(s.sum_x, s.sum_y, s.dofs, s.responses, m, fl,
+                                            _totals(s.known))
     sensitivity = np.empty((k, k))
     dz = np.empty(m)
     motion = np.zeros(2)
@@ -987,7 +998,8 @@ def slip_sensitivity(s: ZoneSolver, fl: Flat, state: np.ndarray, pressure: np.nd
             for a in range(m):
                 dz[a] += s.pending_u[j, a] * factor
         if regular:
-            _flat_motion(s, which, count, S, dz, no_load, motion)
+            _flat_motion(s.sum_x, s.sum_y, s.dofs, s.responses, which, count, S, dz,
+                         no_load, motion)
         for j in range(k):
             sensitivity[j, column] = dz[s.position[slipping[j]]] - motion[0]
     return sensitivity
@@ -1093,7 +1105,8 @@ def residual(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray, dx: float, d
 
 
 @njit(cache=True)
-def _classify(s: ZoneSolver, u: np.ndarray, r: np.ndarray, dx: float, dy: float,
+def _classify(g0: np.ndarray, K: np.ndarray, u: np.ndarray, r: np.ndarray, dx: float,
+              dy: float,
               s_prev: np.ndarray, limit: np.ndarray, in_wave: np.ndarray, cascade: bool,
               work: np.ndarray, new: np.ndarray, slipping: np.ndarray) -> None:
     """The next guess from a solution: open, stuck, or slipping where it may.
@@ -1105,10 +1118,10 @@ def _classify(s: ZoneSolver, u: np.ndarray, r: np.ndarray, dx: float, dy: float,
     for i in range(n):
         Q = work[0, i] = r[i]
         P = work[1, i] = r[n + i]
-        gap = work[2, i] = s.g0[i] + u[n + i] - dy
+        gap = work[2, i] = g0[i] + u[n + i] - dy
         ds = work[3, i] = u[i] - dx - s_prev[i]
-        pressure = P - s.K[n + i, n + i] * gap
-        trial = work[4, i] = Q - s.K[i, i] * ds
+        pressure = P - K[n + i, n + i] * gap
+        trial = work[4, i] = Q - K[i, i] * ds
         bound = work[5, i] = limit[i] * max(pressure, 0.0)
         new[i] = STICK if pressure > 0 else OPEN
         # Nodes outside the wave may slip only without a cascade (fs == fd).
@@ -1374,7 +1387,8 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
                 break
             flat_position[0] = dx
             flat_position[1] = dy
-            _classify(s, u, r, dx, dy, s_prev, limit, in_wave, cascade, work, new, slipping)
+            _classify(s.g0, s.K, u, r, dx, dy, s_prev, limit, in_wave, cascade, work, new,
+                      slipping)
             if first:
                 _predict(state, new, slipping, work, in_wave, cascade)
                 first = False
