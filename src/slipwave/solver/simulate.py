@@ -836,7 +836,7 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
                               "jammed: no further increment can make the whole contact slip"
                               if run.jammed else
                               "not reached: the tangential load cap or step limit came first")
-    # made Variables first: xarray then skips inferring each one (half the time of a
-    # map case went to building its Dataset)
+    # made Variables first: xarray then skips inferring each one (a third of a map
+    # case's time went to building its Dataset)
     return xr.Dataset({name: xr.Variable(*spec) for name, spec in data.items()},
                       coords=coords, attrs=attrs)
