@@ -17,8 +17,8 @@ free displacements), and a slipping node's new coefficient changes one row
 per iteration, then never factorises. Each solve checks its residual: above
 :data:`REFINE_ABOVE` it takes a step of iterative refinement, and if that is not
 enough the inverse is formed again from scratch (Gaussian elimination), as it is
-whenever that is cheaper than the updates or an update meets a vanishing pivot. A state that is
-singular (no inverse) is reported as such, never solved.
+whenever that is cheaper than the updates or an update meets a vanishing pivot. A
+state that is singular (no inverse) is reported as such, never solved.
 
 The increment's loop (:func:`iterate`: the algorithm of
 :meth:`slipwave.solver.contact.Body.solve_increment`, whose docstring and module
