@@ -916,7 +916,7 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
         motion[0] = motion[1] = 0.0
         if regular:
             _flat_motion(s.sum_x, s.sum_y, s.dofs, s.responses, which, count, S, z,
-                             flat_rhs, motion)
+                         flat_rhs, motion)
         dx = motion[0] if fl.dx_unknown else given_dx
         dy = motion[1] if fl.dy_unknown else given_dy
         _assemble(s.base, s.known, s.dofs, s.columns, z, dx, dy, u, r)
@@ -1106,9 +1106,9 @@ def residual(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray, dx: float, d
 
 @njit(cache=True)
 def _classify(g0: np.ndarray, K: np.ndarray, u: np.ndarray, r: np.ndarray, dx: float,
-              dy: float,
-              s_prev: np.ndarray, limit: np.ndarray, in_wave: np.ndarray, cascade: bool,
-              work: np.ndarray, new: np.ndarray, slipping: np.ndarray) -> None:
+              dy: float, s_prev: np.ndarray, limit: np.ndarray, in_wave: np.ndarray,
+              cascade: bool, work: np.ndarray, new: np.ndarray, slipping: np.ndarray
+              ) -> None:
     """The next guess from a solution: open, stuck, or slipping where it may.
 
     ``work`` receives Q, P, gap, ds, trial (``Q - c ds``) and bound (``f`` times
@@ -1364,7 +1364,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     history = np.empty((3, n))
     kept = 0  # of history
     iterations = 0
-    rounds = np.zeros(1, dtype=np.int64)  # an array: numba would type a plain 0 literally
+    rounds = 0  # the cascade round
     weakenings = 0
     newtons = 0  # Newton steps in this round
     dx_before = 0.0
@@ -1373,7 +1373,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
             limit[i] = wave_limit[i] if in_wave[i] else static
         # The round's active set settles.
         taken = -1  # the iterations it took; -1: still cycling, -2: a singular state
-        first = rounds[0] == 0
+        first = rounds == 0
         seen = 0
         for iteration in range(1, MAX_ITERATIONS + 1):
             for i in range(n):
@@ -1419,7 +1419,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
                     if new[i] != state[i]:
                         if cascade and not in_wave[i]:
                             in_wave[i] = True
-                            round_slipped[i] = rounds[0]
+                            round_slipped[i] = rounds
                             limit[i] = wave_limit[i]
                         new[i] = SLIP
                         new_sign[i] = -1.0 if work[4, i] < 0 else 1.0
@@ -1430,7 +1430,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
         if taken == -2:
             return SINGULAR
         iterations += taken
-        if rounds[0] == 0:
+        if rounds == 0:
             # The stuck state of the increment, before any wave: the peak.
             _copy(u_before, u)
             _copy(r_before, r)
@@ -1474,12 +1474,12 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
                 any_over = True
                 # The overloaded nodes start slipping the way their load pushes them.
                 in_wave[i] = True
-                round_slipped[i] = rounds[0]
+                round_slipped[i] = rounds
                 state[i] = SLIP
                 sign[i] = np.sign(work[0, i])
         if not any_over:
             break
-        rounds[0] += 1
+        rounds += 1
         newtons = 0
         kept = 0
     for i in range(n):
