@@ -96,6 +96,30 @@ def test_condensed_stiffness_is_symmetric_positive():
     assert np.linalg.eigvalsh(K).min() > 0
 
 
+
+@pytest.mark.parametrize("holder", ["clamped", "free"])
+def test_condensation_equals_the_dense_schur_complement(holder):
+    """The factor's trailing block is K_kk - K_ki K_ii^-1 K_ik, computed densely here."""
+    slab = Slab(height=12.0, length=16.0, elements=12, holder=holder)
+    assembly = slab_module._assemble(slab)
+    K = assembly.reduced.toarray()
+    i, k = assembly.interior, assembly.kept
+    dense = K[np.ix_(k, k)] - K[np.ix_(k, i)] @ np.linalg.solve(K[np.ix_(i, i)], K[np.ix_(i, k)])
+    np.testing.assert_allclose(slab_module._schur_complement(assembly), dense,
+                               rtol=0, atol=1e-12 * np.abs(dense).max())
+
+
+@pytest.mark.parametrize(("columns", "rows"), [(1, 1), (7, 3), (161, 27), (20, 90)])
+def test_nested_dissection_orders_every_node_once_with_each_separator_after_its_halves(
+        columns, rows):
+    order = slab_module.nested_dissection(columns, rows)
+    assert np.array_equal(np.sort(order), np.arange(columns * rows))
+    if columns * rows > 16:
+        # the first cut is eliminated last: a whole line splitting the grid in two
+        last = order[-min(columns, rows):]
+        i, j = last % columns, last // columns
+        assert np.unique(i).size == 1 or np.unique(j).size == 1
+
 def test_non_converged_increment_raises_solver_error(monkeypatch):
     def never(*args, **kwargs):
         raise contact_module.NotConverged("test: no convergence")
