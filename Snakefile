@@ -9,7 +9,7 @@ import re
 from snakemake.utils import min_version, validate
 
 from slipwave.io.atomic import remove_stale_parts
-from slipwave.map import friction_grid, shard_count
+from slipwave.map import deal_rows, friction_grid, shard_count
 from slipwave.validation import load_schema, schema_path
 from slipwave.campaign import (
     cache_option,
@@ -43,18 +43,18 @@ check_campaign(config, campaign, load_schema("tests"))
 
 TEST_IDS = list(campaign["test_id"])
 FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
-MAP_HEIGHT_RATIOS = [f"{ratio:g}" for ratio in config["map"]["height_ratios"]]
+MAP_JOBS = deal_rows(config["map"]["height_ratios"], config["map"]["row_jobs"])
 MAP_SHARDS = shard_count(friction_grid(*config["map"]["frictions"]), config["map"]["shard_size"])
 MAP_SHARD_FILES = [
-    f"results/map/rows/hl{ratio}-{shard}.nc"
-    for ratio in MAP_HEIGHT_RATIOS
+    f"results/map/rows/job{job}-{shard}.nc"
+    for job in range(len(MAP_JOBS))
     for shard in range(MAP_SHARDS)
 ]
 
 
 wildcard_constraints:
     test_id="|".join(map(re.escape, TEST_IDS)) or "no-tests",
-    height_ratio="|".join(MAP_HEIGHT_RATIOS).replace(".", r"\."),
+    job=r"\d+",
     shard=r"\d+",
 
 

@@ -1,9 +1,9 @@
 """The behaviour map (issue 14): wall time of the workflow, and what the map must be.
 
 1. Time: ``snakemake --cores 2 results/map/map.nc`` builds the full 1572-case map (160
-   elements, N held: 12 row jobs and their assembly) from a clean ``results/map/`` and
-   an empty condensation cache, in a copy of the repository (the compiled solver
-   already on disk). Target <= 10 s wall (issue 33); the mean per case is reported.
+   elements, N held: the rows dealt to ``map.row_jobs`` jobs, then joined) from a clean
+   ``results/map/`` and an empty condensation cache, in a copy of the repository (the
+   compiled solver already on disk). Target <= 10 s wall (issue 33); the mean per case is reported.
    The figures (``map.png``, ``zones.png``, which need the campaign summary, built
    first and not timed) are timed apart.
 2. Zero failed cases; the largest residual is reported.
@@ -54,7 +54,7 @@ BIN = Path(sys.executable).parent
 def mean_case_seconds(logs: Path) -> float:
     """Mean wall time per case, from the row jobs' logs (the map holds no timings)."""
     total = cases = 0.0
-    for line in (line for log in logs.glob("hl*.log") for line in log.read_text().splitlines()):
+    for line in (line for log in logs.glob("job*.log") for line in log.read_text().splitlines()):
         found = re.search(r": (\d+) cases in ([\d.]+) s", line)
         if found:
             cases += int(found.group(1))

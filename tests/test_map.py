@@ -16,6 +16,7 @@ from slipwave.map import (
     assemble_map,
     behaviour_legend,
     contiguity,
+    deal_rows,
     friction_grid,
     map_agreement,
     map_row,
@@ -137,6 +138,28 @@ def test_map_command_rows_then_assembly(tmp_path, capsys):
     assert whole.attrs["normal_control"] == "force" and whole.attrs["normal_friction"] == 0
     assert len(pd.read_csv(out["map.csv"])) == 6
     assert all(out[name].stat().st_size > 5_000 for name in ("map.png", "zones.png"))
+    # the same rows computed by one job, in one file: the same map
+    both = tmp_path / "both.nc"
+    assert main(["map", "row", "--height-ratio", "0.6", "0.3", "--frictions", "0.5", "1.0",
+                 "0.25", "--elements", "40", "-o", str(both)]) == 0
+    assert read_dataset(both)["height_ratio"].values.tolist() == [0.6, 0.3]
+    assert main(["map", "assemble", str(both), "-o", str(tmp_path / "again.nc"),
+                 "--csv", str(tmp_path / "again.csv"), "--legend",
+                 str(tmp_path / "again.md")]) == 0
+    again = read_dataset(tmp_path / "again.nc")
+    for name in ("sequence", "behaviour", "ratio_at_gross", "steps"):
+        assert (again[name].values == whole[name].values).all(), name
+
+
+@pytest.mark.parametrize("jobs", [1, 2, 3, 5, 12, 40])
+def test_the_rows_are_dealt_to_jobs_whole_and_about_evenly(jobs):
+    dealt = deal_rows(PAPER_HEIGHT_RATIOS, jobs)
+    assert len(dealt) == min(jobs, len(PAPER_HEIGHT_RATIOS))
+    assert sorted(r for job in dealt for r in job) == sorted(PAPER_HEIGHT_RATIOS)
+    costs = [sum(2 + r for r in job) for job in dealt]
+    assert max(costs) - min(costs) <= 2 + max(PAPER_HEIGHT_RATIOS)  # at most one row apart
+    with pytest.raises(SlipwaveError, match="at least 1"):
+        deal_rows(PAPER_HEIGHT_RATIOS, 0)
 
 
 def test_a_failing_case_is_named(monkeypatch):

@@ -120,7 +120,8 @@ def test_every_schema_setting_is_tried():
 
     schema = load_schema("config")["properties"]
     tried = {(s, k) for s, k, _, _ in REACHES}
-    untried = {("map", "height_ratios"), ("map", "shard_size"), ("fit", "enabled")}  # jobs
+    untried = {("map", "height_ratios"), ("map", "row_jobs"), ("map", "shard_size"),
+               ("fit", "enabled")}  # jobs
     for section in ("detection", "video", "fit", "map"):
         for key in schema[section]["properties"]:
             assert (section, key) in tried | untried, f"{section}.{key} is not tried"

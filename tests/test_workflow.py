@@ -108,7 +108,8 @@ def test_full_run_on_default_campaign(workdir):
     assert (workdir / "reports/campaign.pdf").read_bytes().startswith(b"%PDF")
     fits = pd.read_csv(workdir / "results/fits.csv")
     assert list(fits["test_id"]) == ids and (workdir / "results/fits.png").stat().st_size > 1000
-    # the behaviour map: one row job per H/L, the map, its figures with the tests on them
+    # the behaviour map: its rows dealt to two jobs (the taller row to job 0), the map, its
+    # figures with the tests on them
     whole = read_dataset(workdir / "results/map/map.nc")
     assert whole["height_ratio"].values.tolist() == [0.25, 0.5]
     assert whole["friction"].values.tolist() == [0.4, 0.6, 0.8, 1.0]
@@ -116,10 +117,10 @@ def test_full_run_on_default_campaign(workdir):
     assert len(pd.read_csv(workdir / "results/map/map.csv")) == 8
     for name in ("map.png", "zones.png", "legend.md"):
         assert (workdir / "results/map" / name).stat().st_size > 100
-    for log in ("hl0.25-0", "hl0.5-0", "map", "map_figures"):
+    for log in ("job0-0", "job1-0", "map", "map_figures"):
         assert (workdir / f"results/logs/map/{log}.log").exists()
     assert "3 tests placed" in (workdir / "results/logs/map/map_figures.log").read_text()
-    assert "4/4" in (workdir / "results/logs/map/hl0.5-0.log").read_text()  # progress
+    assert "H/L 0.5: 100%" in (workdir / "results/logs/map/job0-0.log").read_text()  # progress
 
 
 def test_column_map_from_config(workdir):

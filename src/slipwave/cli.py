@@ -533,6 +533,7 @@ def _simulate_test(args: argparse.Namespace) -> None:
 
 
 def _map_row(args: argparse.Namespace) -> None:
+    import xarray as xr
     from tqdm import tqdm
 
     from slipwave.io import write_dataset
@@ -541,24 +542,31 @@ def _map_row(args: argparse.Namespace) -> None:
     from slipwave.solver import LoadPath, Slab, simulation_memory
 
     frictions = shard(friction_grid(*args.frictions), args.shard, args.shard_size)
-    slab = Slab(height=args.height_ratio * default.CONTACT_LENGTH_MM, elements=args.elements)
     path = LoadPath(normal_load=args.normal_load, tangential_step=args.tangential_step,
                     normal_control=args.normal_control,
                     normal_friction=args.normal_friction == "on")
-    require_memory(simulation_memory(slab, path), f"the map's row at H/L {args.height_ratio:g} "
+    tallest = max(args.height_ratio)
+    slab = Slab(height=tallest * default.CONTACT_LENGTH_MM, elements=args.elements)
+    require_memory(simulation_memory(slab, path), f"the map's row at H/L {tallest:g} "
                    f"({args.elements} elements)", limit_gb=args.memory_limit)
-    with tqdm(total=frictions.size, desc=f"H/L {args.height_ratio:g}", unit="case",
-              mininterval=2.0, file=sys.stderr) as bar:
-        row = map_row(args.height_ratio, frictions, elements=args.elements, path=path,
-                      min_size=args.min_zone, cache=_solver_cache(args),
-                      progress=lambda done, total: bar.update(1))
-    seconds = row["seconds"].values
-    condensation = row.attrs.pop("condensation_s")
-    # wall times go to the log, not the map: the map is the same on any machine
-    write_dataset(row.drop_vars("seconds"), args.output)
-    print(f"H/L {args.height_ratio:g}: {frictions.size} cases in {seconds.sum():.1f} s "
-          f"(mean {1000 * seconds.mean():.1f} ms, condensation {condensation} s), "
-          f"largest residual {float(row['max_residual'].max()):.2g} -> {args.output}")
+    cache = _solver_cache(args)
+    rows = []
+    for ratio in args.height_ratio:
+        with tqdm(total=frictions.size, desc=f"H/L {ratio:g}", unit="case",
+                  mininterval=2.0, file=sys.stderr) as bar:
+            row = map_row(ratio, frictions, elements=args.elements, path=path,
+                          min_size=args.min_zone, cache=cache,
+                          progress=lambda done, total: bar.update(1))
+        seconds = row["seconds"].values
+        # wall times go to the log, not the map: the map is the same on any machine
+        condensation = row.attrs.pop("condensation_s")
+        print(f"H/L {ratio:g}: {frictions.size} cases in {seconds.sum():.1f} s "
+              f"(mean {1000 * seconds.mean():.1f} ms, condensation {condensation} s), "
+              f"largest residual {float(row['max_residual'].max()):.2g}")
+        rows.append(row.drop_vars("seconds"))
+    joined = xr.concat(rows, dim="height_ratio", combine_attrs="drop_conflicts")
+    write_dataset(joined, args.output)
+    print(f"{len(rows)} rows of {frictions.size} cases -> {args.output}")
 
 
 def _map_assemble(args: argparse.Namespace) -> None:
@@ -821,12 +829,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     mapping = commands.add_parser(
         "map", help="the behaviour map over f x H/L (the paper's figure 2)",
-        description="'map row' runs every friction coefficient at one H/L; 'map assemble' "
+        description="'map row' runs every friction coefficient at one H/L (or several); "
+        "'map assemble' "
         "joins the rows and numbers the behaviours; 'map figures' draws the map.",
     )
     steps = mapping.add_subparsers(dest="map_command", required=True, metavar="STEP")
-    row = steps.add_parser("row", parents=[cache, memory], help="one H/L, every f")
-    row.add_argument("--height-ratio", type=_positive_float, required=True, help="H/L")
+    row = steps.add_parser("row", parents=[cache, memory],
+                           help="every f at one H/L, or at several in turn (one file)")
+    row.add_argument("--height-ratio", type=_positive_float, nargs="+", required=True,
+                     help="H/L, one or more: the rows are computed one after another in "
+                     "this process and written to one file")
     row.add_argument("--frictions", type=_positive_float, nargs=3,
                      default=list(default.MAP_FRICTIONS),
                      metavar=("START", "STOP", "STEP"), help="friction coefficients "

@@ -1,16 +1,18 @@
-# The behaviour map (the paper's figure 2): one job per H/L and shard of its f range
-# (map.shard_size coefficients; 0: the whole row, the slab condensed once per job), then
-# the shards joined, the behaviours named and the map drawn. On a cluster, the shards'
-# jobs are batched by their group (profiles/slurm: group-components).
+# The behaviour map (the paper's figure 2): the H/L rows dealt to map.row_jobs jobs of
+# about equal cost (each runs its rows in one process, paying its start-up once), each
+# job's f range in shards when map.shard_size is set; then the pieces joined, the
+# behaviours named and the map drawn. On a cluster, the jobs are batched by their group
+# (profiles/slurm: group-components).
 
 
 rule map_row:
-    """A shard of the map's friction coefficients at one H/L."""
+    """A job's H/L rows (or a shard of their friction coefficients)."""
     output:
-        "results/map/rows/hl{height_ratio}-{shard}.nc",
+        "results/map/rows/job{job}-{shard}.nc",
     log:
-        "results/logs/map/hl{height_ratio}-{shard}.log",
+        "results/logs/map/job{job}-{shard}.log",
     params:
+        height_ratios=lambda wildcards: " ".join(f"{r:g}" for r in MAP_JOBS[int(wildcards.job)]),
         frictions=" ".join(str(v) for v in config["map"]["frictions"]),
         settings=map_row_options,
         shard_size=config["map"]["shard_size"],
@@ -25,7 +27,7 @@ rule map_row:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave map row --height-ratio {wildcards.height_ratio} "
+        "slipwave map row --height-ratio {params.height_ratios} "
         "--frictions {params.frictions} {params.settings} --shard {wildcards.shard} "
         "--shard-size {params.shard_size} --memory-limit {params.memory_gb} "
         "{params.cache} -o {output:q} > {log:q} 2>&1"
