@@ -70,6 +70,7 @@ onerror:
 
 
 include: "workflow/rules/common.smk"
+include: "workflow/rules/compile.smk"
 include: "workflow/rules/ingest.smk"
 include: "workflow/rules/detect.smk"
 include: "workflow/rules/summary.smk"

@@ -192,3 +192,15 @@ def test_simulate_refuses_silly_travel(tmp_path, capsys, option, message):
     with pytest.raises(SlipwaveError, match=message):
         LoadPath(**{option[2 * k][2:].replace("-", "_"): float(option[2 * k + 1])
                     for k in range(len(option) // 2)})
+
+
+def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "solver.json"
+    assert main(["compile", "-o", str(out)]) == 0
+    report = json.loads(out.read_text())
+    assert {"iterate", "move_to", "set_base", "solve", "residual"} <= set(report["kernels"])
+    for kernel in report["kernels"].values():
+        assert kernel["loaded"] + kernel["compiled"] >= 1 and kernel["cache_path"]
+    assert "kernels" in capsys.readouterr().out

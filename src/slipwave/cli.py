@@ -287,6 +287,22 @@ def _fits(args: argparse.Namespace) -> None:
     print(f"{len(table)} tests -> {args.output}")
 
 
+def _compile(args: argparse.Namespace) -> None:
+    import json
+
+    from slipwave.io import atomic_output
+    from slipwave.solver.compiled import compile_solver
+
+    report = compile_solver()
+    with atomic_output(args.output) as temporary:
+        temporary.write_text(json.dumps(report, indent=2) + "\n")
+    kernels = report["kernels"].values()
+    compiled = sum(kernel["compiled"] for kernel in kernels)
+    print(f"solver: {len(report['kernels'])} kernels, {compiled} compiled now and "
+          f"{sum(kernel['loaded'] for kernel in kernels)} loaded from the disk cache, in "
+          f"{report['seconds']:.1f} s -> {args.output}")
+
+
 def _summary(args: argparse.Namespace) -> None:
     import pandas as pd
 
@@ -962,6 +978,13 @@ def build_parser() -> argparse.ArgumentParser:
     fits.add_argument("--plot", type=Path, default=None,
                       help="also draw T/|N| and the fitted coefficients against H/L")
     fits.set_defaults(run=_fits)
+
+    build = commands.add_parser(
+        "compile", help="compile the solver once (numba's disk cache), before the jobs "
+        "that need it", description="Compile every kernel of the solver, or load it from "
+        "the disk cache, and report which (JSON).")
+    build.add_argument("-o", "--output", type=Path, required=True, help="JSON to write")
+    build.set_defaults(run=_compile)
 
     summary = commands.add_parser(
         "summary", help="one row per test: T/|N| at gross slips, wave counts, phases",

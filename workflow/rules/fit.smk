@@ -1,7 +1,8 @@
 rule fit:
     """Friction laws fitted to one test through the solver, on its own configuration."""
     input:
-        "results/{test_id}/recording.nc",
+        recording="results/{test_id}/recording.nc",
+        solver=ancient("results/solver.json"),
     output:
         report(
             "results/{test_id}/fit.json",
@@ -26,7 +27,7 @@ rule fit:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave fit {input:q} -o {output:q} "
+        "slipwave fit {input.recording:q} -o {output:q} "
         "--setting {params.settings} --laws {params.laws} --elements {params.elements} "
         "--max-evaluations {params.max_evaluations} "
         "--load-calibration {params.load_calibration} {params.detection} {params.cache} "

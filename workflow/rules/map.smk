@@ -7,6 +7,8 @@
 
 rule map_row:
     """A job's H/L rows (or a shard of their friction coefficients)."""
+    input:
+        ancient("results/solver.json"),
     output:
         "results/map/rows/job{job}-{shard}.nc",
     log:
@@ -61,6 +63,7 @@ rule map_figures:
     input:
         map="results/map/map.nc",
         summary="results/summary.csv",
+        solver=ancient("results/solver.json"),
     output:
         figure=report(
             "results/map/map.png", caption="../report/map.rst", category="Behaviour map"

@@ -3,7 +3,8 @@ rule simulate:
     the zone history and the simulated kymograph; and the law's neighbours, a load
     cell's calibration apart, for the simulation's own scatter."""
     input:
-        "results/{test_id}/fit.json",
+        fit="results/{test_id}/fit.json",
+        solver=ancient("results/solver.json"),
     output:
         recording="results/{test_id}/simulated/recording.nc",
         contact="results/{test_id}/simulated/contact.nc",
@@ -22,7 +23,7 @@ rule simulate:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave simulate --fit {input:q} -o {output.recording:q} "
+        "slipwave simulate --fit {input.fit:q} -o {output.recording:q} "
         "--contact {output.contact:q} --steps {output.steps:q} --scatter {output.scatter:q} "
         "--band {params.band[0]} {params.band[1]} {params.detection} {params.cache} "
         "> {log:q} 2>&1"

@@ -1,0 +1,20 @@
+# The solver compiled once, first: jobs that start together on an empty numba cache
+# would each compile it (about half a minute each). The rules that simulate take its
+# report as an ancient() input: a new report does not make them run again.
+
+
+rule compile:
+    """The solver's kernels compiled (or loaded from numba's disk cache)."""
+    output:
+        "results/solver.json",
+    log:
+        "results/logs/compile.log",
+    priority: 100
+    threads: 1
+    resources:
+        mem_mb=scaled_memory(1000),
+        runtime=10,
+    conda:
+        "../envs/slipwave.yaml"
+    shell:
+        "slipwave compile -o {output:q} > {log:q} 2>&1"
