@@ -10,6 +10,8 @@
    second process then loads it from disk (its first increment is timed).
 4. Peak memory (the process's maximum resident set) of the 320-element test <= 300 MB.
 5. The time of the 280 s test against elements, 40 to 640, and its growth exponent.
+6. The slab's condensation at 160, 320 and 640 elements: time and peak memory (no
+   target; the test times above start from a condensed slab).
 
 Times are the best of ``--repeat`` runs (the slab condensed beforehand), CPU time of one
 process with OpenBLAS on one thread.
@@ -101,6 +103,26 @@ print(json.dumps({"import": imported - start, "first_run": first - imported,
 """
 
 
+_CONDENSATION = """
+import json, sys, time
+from slipwave.solver.slab import Slab, assemble_condensed
+def rss(key):
+    return next(int(line.split()[1]) for line in open("/proc/self/status")
+                if line.startswith(key)) / 1024
+assemble_condensed(Slab(elements=8))
+start, before = time.perf_counter(), rss("VmRSS:")
+assemble_condensed(Slab(height=0.5 * 80.0, elements=int(sys.argv[1])))
+print(json.dumps({"seconds": time.perf_counter() - start, "peak_mb": rss("VmHWM:") - before}))
+"""
+
+
+def condensation(elements: int) -> dict[str, float]:
+    """A fresh process condenses the H/L 0.5 slab: its time and peak memory above its start."""
+    out = subprocess.run([sys.executable, "-c", _CONDENSATION, str(elements)], check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def child(elements: int, cache_dir: str) -> dict[str, float]:
     """A fresh process: its import, first small simulation and peak memory."""
     env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir}
@@ -124,6 +146,12 @@ def main() -> None:
           f"{COMPILATION_TARGET:.0f} s target); a second process's first simulation "
           f"{warm['first_run']:.2f} s (loaded from the disk cache; imports "
           f"{warm['import']:.1f} s)")
+
+    for elements in (160, 320, 640):
+        condensed = condensation(elements)
+        print(f"solver: condensation of the slab (H/L 0.5), {elements} elements: "
+              f"{condensed['seconds']:.2f} s, peak memory {condensed['peak_mb']:.0f} MB above "
+              f"the process's start")
 
     mean, cases = map_cases(args.repeat)
     status = check("map case at 160 elements, s", mean, MAP_CASE_TARGET, at_least=False)

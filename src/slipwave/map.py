@@ -324,11 +324,10 @@ def contiguity(whole: xr.Dataset) -> float:
 def deal_rows(height_ratios: Sequence[float], jobs: int) -> list[list[float]]:
     """The map's rows dealt to ``jobs`` jobs of about equal cost, each run in one process.
 
-    A job pays its process's start-up once (imports and the compiled solver loaded,
-    about 1.5 s), so a few jobs of several rows each beat one job per row on a few
-    cores. A row's cost grows with its slab: about 2 + H/L in units of a thin slab's
-    row's half (measured: 1.3 s at H/L 0.1, 2.5 s at 1.5 for 131 cases at 160
-    elements). Rows are dealt longest first, each to the job with the least so far.
+    A job pays its process's start-up once (imports, the compiled solver loaded), so
+    a few jobs of several rows each beat one job per row on a few cores. A row's cost
+    grows with its slab's height, as 2 + H/L (which fits the rows' wall times at 160
+    elements). Rows are dealt costliest first, each to the job with the least so far.
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 # The solver compiled once, first: jobs that start together on an empty numba cache
-# would each compile it (about half a minute each). The rules that simulate take its
-# report as an ancient() input: a new report does not make them run again.
+# would each compile it. The rules that simulate take its report as an ancient()
+# input: a new report does not make them run again.
 
 
 rule compile:

@@ -2,10 +2,9 @@
 
 The solver's kernels are compiled by numba on their first call and cached on disk
 (beside :mod:`slipwave.solver.active_set`, or in numba's user cache where that is
-read-only), which takes about half a minute once per installation. Jobs started
-together on an empty cache each compile them (two map jobs on two cores: a minute of
-CPU; a hundred cluster jobs: fifty minutes): :func:`compile_solver` compiles them
-once, so that the workflow's first rule does it and the others load them.
+read-only), once per installation. Jobs started together on an empty cache would each
+compile them (every job of a cluster's first run): :func:`compile_solver` compiles
+them once, so that the workflow's first rule does it and the others load them.
 """
 
 from __future__ import annotations
