@@ -30,6 +30,7 @@ RESERVED_TEST_IDS = {
     "map": "results/map/",
     "logs": "results/logs/",
     "cache": "results/cache/",
+    "solver.json": "results/solver.json",
 }
 """Names of the campaign's own products beside the tests' (a test's files are
 ``results/<test_id>/`` and ``reports/<test_id>.html``): no test may take one."""
