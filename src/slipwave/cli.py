@@ -846,8 +846,8 @@ def build_parser() -> argparse.ArgumentParser:
     mapping = commands.add_parser(
         "map", help="the behaviour map over f x H/L (the paper's figure 2)",
         description="'map row' runs every friction coefficient at one H/L (or several); "
-        "'map assemble' "
-        "joins the rows and numbers the behaviours; 'map figures' draws the map.",
+        "'map assemble' joins the rows and numbers the behaviours; 'map figures' draws "
+        "the map.",
     )
     steps = mapping.add_subparsers(dest="map_command", required=True, metavar="STEP")
     row = steps.add_parser("row", parents=[cache, memory],
@@ -979,12 +979,12 @@ def build_parser() -> argparse.ArgumentParser:
                       help="also draw T/|N| and the fitted coefficients against H/L")
     fits.set_defaults(run=_fits)
 
-    build = commands.add_parser(
+    compiling = commands.add_parser(
         "compile", help="compile the solver once (numba's disk cache), before the jobs "
         "that need it", description="Compile every kernel of the solver, or load it from "
         "the disk cache, and report which (JSON).")
-    build.add_argument("-o", "--output", type=Path, required=True, help="JSON to write")
-    build.set_defaults(run=_compile)
+    compiling.add_argument("-o", "--output", type=Path, required=True, help="JSON to write")
+    compiling.set_defaults(run=_compile)
 
     summary = commands.add_parser(
         "summary", help="one row per test: T/|N| at gross slips, wave counts, phases",
