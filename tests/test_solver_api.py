@@ -98,10 +98,13 @@ def test_condensed_stiffness_is_symmetric_positive():
 
 
 @pytest.mark.parametrize("holder", ["clamped", "free"])
-def test_condensation_equals_the_dense_schur_complement(holder):
-    """The factor's trailing block is K_kk - K_ki K_ii^-1 K_ik, computed densely here."""
-    slab = Slab(height=12.0, length=16.0, elements=12, holder=holder)
+@pytest.mark.parametrize(("height", "elements"), [(12.0, 12), (40.0, 6)])
+def test_condensation_equals_the_dense_schur_complement(holder, height, elements):
+    """The substructured condensation is K_kk - K_ki K_ii^-1 K_ik, computed densely here
+    (a wide slab is cut across its columns, a tall one across its rows)."""
+    slab = Slab(height=height, length=16.0, elements=elements, holder=holder)
     assembly = slab_module._assemble(slab)
+    assert set(np.unique(assembly.side)) == {-1, 0, 1}
     K = assembly.reduced.toarray()
     i, k = assembly.interior, assembly.kept
     dense = K[np.ix_(k, k)] - K[np.ix_(k, i)] @ np.linalg.solve(K[np.ix_(i, i)], K[np.ix_(i, k)])

@@ -154,7 +154,7 @@ say "a map job that needs more memory than its first attempt has (retries: 2)"
 grep -q "Error in rule map_row" "$WORK/retried.log" || fail "no failure was reported"
 grep -Eo "slurm_logs/[^ ]+\.log" "$WORK/retried.log" | head -1 | sed 's/^/  its SLURM log: /'
 grep -q "Trying to restart" "$WORK/retried.log" || fail "the failed job was not retried"
-say "failed at attempt 1 (50 MB), passed at attempt 2 (100 MB): $(grep -c 'Trying to restart' "$WORK/retried.log" || true) restart(s)"
+say "failed at attempt 1 (30 MB), passed at attempt 2 (60 MB): $(grep -c 'Trying to restart' "$WORK/retried.log" || true) restart(s)"
 
 rm -f "$WORK/failing/results/map/rows/job0-0.nc" "$WORK/failing/results/map/map.nc"
 say "the same without retries: the job fails for good"

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from skfem import Basis, BilinearForm, ElementQuad1, ElementVector, MeshQuad, asm
@@ -49,7 +50,7 @@ if TYPE_CHECKING:
 SENSOR_HEIGHT = 5.0
 """Height (mm) above the contact of the DG and DD displacement sensors."""
 
-_CACHE_VERSION = "q1sri-4"
+_CACHE_VERSION = "q1sri-5"
 
 
 @dataclass(frozen=True)
@@ -277,6 +278,7 @@ class _Assembly:
     is_x: np.ndarray
     kept: np.ndarray
     interior: np.ndarray
+    side: np.ndarray  # of each interior dof: 0 or 1, either side of the first cut; -1 on it
     n_contact: int
 
 
@@ -346,7 +348,11 @@ def _assemble(slab: Slab) -> _Assembly:
     rank[nested_dissection(x.size, y.size)] = np.arange(x.size * y.size)
     key = np.append(2 * rank[row * x.size + column] + ~is_x[free], 2 * rank.size)
     interior = interior[np.argsort(key[interior], kind="stable")]
-    return _Assembly(reduced, basis, locations, is_x, kept_r, interior,
+    # the side of the dissection's first cut (0, 1) or on it (-1, with the rotation)
+    across_columns, middle = _first_cut(x.size, y.size)
+    place = np.append(column if across_columns else row, middle)
+    side = np.where(place < middle, 0, np.where(place > middle, 1, -1))
+    return _Assembly(reduced, basis, locations, is_x, kept_r, interior, side[interior],
                      contact_x.size + contact_y.size)
 
 
@@ -381,18 +387,31 @@ def nested_dissection(columns: int, rows: int) -> np.ndarray:
     parts = [(0, columns, 0, rows, False)]  # (i0, i1, j0, j1, is a separator)
     while parts:  # depth first, the separator after its halves (a stack, reversed)
         i0, i1, j0, j1, separator = parts.pop()
-        if separator or (i1 - i0) * (j1 - j0) <= _DISSECTION_LEAF:
+        across_columns, middle = _first_cut(i1 - i0, j1 - j0)
+        if separator or middle < 0:
             j, i = np.mgrid[j0:j1, i0:i1]
             order.append((j * columns + i).ravel())
-        elif i1 - i0 >= j1 - j0:
-            middle = (i0 + i1) // 2
+        elif across_columns:
+            middle += i0
             parts += [(middle, middle + 1, j0, j1, True), (middle + 1, i1, j0, j1, False),
                       (i0, middle, j0, j1, False)]
         else:
-            middle = (j0 + j1) // 2
+            middle += j0
             parts += [(i0, i1, middle, middle + 1, True), (i0, i1, middle + 1, j1, False),
                       (i0, i1, j0, middle, False)]
     return np.concatenate(order)
+
+
+def _first_cut(columns: int, rows: int) -> tuple[bool, int]:
+    """Where nested dissection cuts a grid: (across its columns?, the line's index).
+
+    The index is -1 when the grid is small enough to be left whole.
+    """
+    if columns * rows <= _DISSECTION_LEAF:
+        return True, -1
+    if columns >= rows:
+        return True, columns // 2
+    return False, rows // 2
 
 
 def _factorise(matrix: sp.csc_matrix) -> spla.SuperLU:
@@ -409,21 +428,50 @@ def _factorise(matrix: sp.csc_matrix) -> spla.SuperLU:
 def _schur_complement(assembly: _Assembly) -> np.ndarray:
     """K_kk - K_ki K_ii^-1 K_ik: the slab condensed onto its kept dofs.
 
-    The whole reduced stiffness is factorised with the kept dofs last; without
-    pivoting, the trailing blocks of its factors multiply to the Schur complement
-    (L_kk U_kk), so no solve per kept dof is needed (those solves, one sweep of the
-    whole factor each, took several times the factorisation).
+    By substructuring at the nested dissection's first cut: each side's interior is
+    condensed onto the dofs it touches (its kept dofs, the cut's line, the holder's
+    rotation), the sides' contributions are summed, densely, and the cut is then
+    condensed out. Each side is one sparse factorisation, half the size of the whole
+    slab's, which halves the peak memory (the factor's export is as large as the
+    factor itself).
     """
-    order = np.concatenate([assembly.interior, assembly.kept])
-    factor = _factorise(assembly.reduced[order][:, order].tocsc())
+    reduced, kept = assembly.reduced, assembly.kept
+    boundary = np.concatenate([kept, assembly.interior[assembly.side < 0]])
+    schur = reduced[boundary][:, boundary].toarray()
+    for side in np.unique(assembly.side[assembly.side >= 0]):
+        inner = assembly.interior[assembly.side == side]
+        touched = np.flatnonzero(abs(reduced[inner][:, boundary]).sum(axis=0))
+        outer = boundary[touched]
+        # K_bi K_ii^-1 K_ib of this side: K_bb minus the trailing block of the factor
+        # of [[K_ii, K_ib], [K_bi, K_bb]]
+        correction = reduced[outer][:, outer].toarray() - _trailing_schur(
+            reduced, inner, outer)
+        schur[np.ix_(touched, touched)] -= correction
+    n_kept = kept.size
+    if boundary.size == n_kept:
+        return schur
+    cut = sla.cho_factor(schur[n_kept:, n_kept:])
+    coupling = schur[:n_kept, n_kept:]
+    return schur[:n_kept, :n_kept] - coupling @ sla.cho_solve(cut, coupling.T)
+
+
+def _trailing_schur(reduced: sp.csc_matrix, inner: np.ndarray, outer: np.ndarray
+                    ) -> np.ndarray:
+    """K_oo - K_oi K_ii^-1 K_io, from one factorisation with the outer dofs last.
+
+    Without pivoting, the trailing blocks of the factors multiply to the Schur
+    complement (L_oo U_oo), so no solve per outer dof is needed (those solves, one
+    sweep of the whole factor each, took several times the factorisation).
+    """
+    order = np.concatenate([inner, outer])
+    factor = _factorise(reduced[order][:, order].tocsc())
     if not (np.array_equal(factor.perm_c, np.arange(order.size))
             and np.array_equal(factor.perm_r, np.arange(order.size))):
         raise SlipwaveError("the slab's condensation: its factorisation left the order "
                             "it was given")
-    # symmetric, unpivoted: U = D L^T, so L_kk U_kk = U_kk^T D_kk^-1 U_kk and only U is
+    # symmetric, unpivoted: U = D L^T, so L_oo U_oo = U_oo^T D_oo^-1 U_oo and only U is
     # exported (each export is as large as SuperLU's own storage)
-    start = assembly.interior.size
-    upper = factor.U[start:, start:].toarray()
+    upper = factor.U[inner.size:, inner.size:].toarray()
     return upper.T @ (upper / np.diag(upper)[:, None])
 
 
@@ -446,9 +494,9 @@ def _condense_sensors(schur: np.ndarray, n_contact: int) -> tuple[np.ndarray, np
 def condensation_memory(slab: Slab, *, recovery: bool = False) -> int:
     """Bytes that condensing the slab takes at its peak, estimated from its mesh.
 
-    The sparse factor of the slab's stiffness in nested-dissection order, about
-    N log2 N entries for N dofs, and its export dominate (300 bytes per N log2 N,
-    measured 245 to 290 from 8,700 to 430,000 dofs); ``recovery`` adds the dense
+    The sparse factors of the slab's two halves in nested-dissection order, about
+    N log2 N entries for N dofs, and their exports dominate (170 bytes per N log2 N;
+    see ``benchmarks/RESULTS.md`` for the measured figures); ``recovery`` adds the dense
     maps of :func:`displacement_recovery` (the virtual bench's camera).
 
     Parameters
@@ -472,7 +520,7 @@ def condensation_memory(slab: Slab, *, recovery: bool = False) -> int:
     rows = slab.heights().size
     kept = 2 * columns + 2
     dofs = 2 * columns * rows
-    total = 300 * dofs * np.log2(dofs) + 4 * kept * kept * 8
+    total = 170 * dofs * np.log2(dofs) + 4 * kept * kept * 8
     if recovery:
         total += 4 * dofs * kept * 8 + 2 * rows * columns * kept * 8
     return int(total)
