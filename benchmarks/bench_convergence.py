@@ -47,7 +47,6 @@ from slipwave.convergence import (
     FEATURES,
     converged_from,
     mesh_changes,
-    process_zone,
     simulated_summary,
 )
 from slipwave.setup import Setting, TestSetup
@@ -122,7 +121,7 @@ def summary(changes: pd.DataFrame, start_of: pd.Series, meshes: list[int]) -> pd
     moved = fitted["sigmas"].abs().fillna(np.inf)
     rows = []
     for law, friction in LAWS.items():
-        zone = process_zone(SETUP, friction)
+        zone = SETUP.process_zone(friction)
         row: dict[str, str] = {
             "law": law,
             "process zone (mm)": f"{zone:.1f}" if zone else "none",
@@ -165,7 +164,7 @@ def main() -> None:
     summary(changes, start_of, sorted(args.elements)).to_csv(
         STATIC / "convergence_summary.csv", index=False)
     for law, friction in LAWS.items():
-        zone = process_zone(SETUP, friction)
+        zone = SETUP.process_zone(friction)
         across = ", ".join(f"{n} el {zone * n / SETUP['length_mm']:.1f}"
                            for n in sorted(args.elements))
         print(f"convergence: {law}: process zone {zone:.1f} mm"

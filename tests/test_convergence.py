@@ -11,7 +11,6 @@ from slipwave.convergence import (
     converged_from,
     feature_summary,
     mesh_changes,
-    process_zone,
     simulated_summary,
 )
 from slipwave.fit import SlipFeatures
@@ -49,10 +48,10 @@ def test_a_simulation_is_summed_up_feature_by_feature_its_first_slip_at_the_righ
 
 def test_the_process_zone_grows_with_dc_and_shrinks_with_the_friction_drop():
     setup = _setup()
-    base = process_zone(setup, SlipWeakening(fs=0.9, fd=0.6, dc=0.1))
-    assert process_zone(setup, SlipWeakening(fs=0.9, fd=0.6, dc=0.2)) == pytest.approx(2 * base)
-    assert process_zone(setup, SlipWeakening(fs=0.9, fd=0.75, dc=0.1)) == pytest.approx(2 * base)
-    assert process_zone(setup, Coulomb(fs=0.9, fd=0.6)) == 0.0
+    base = setup.process_zone(SlipWeakening(fs=0.9, fd=0.6, dc=0.1))
+    assert setup.process_zone(SlipWeakening(fs=0.9, fd=0.6, dc=0.2)) == pytest.approx(2 * base)
+    assert setup.process_zone(SlipWeakening(fs=0.9, fd=0.75, dc=0.1)) == pytest.approx(2 * base)
+    assert setup.process_zone(Coulomb(fs=0.9, fd=0.6)) == 0.0
 
 
 def test_a_feature_present_at_one_mesh_only_has_not_converged():

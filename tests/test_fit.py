@@ -14,12 +14,15 @@ from fuzzing import valid_fit
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
+from slipwave.events.detect import DEFAULT_DETECTION
 from slipwave.fit import (
     FIRST_SLIP_REACH,
     PARTIAL_DROP_SIGMA,
     RATIO_SIGMA,
     ROUGHNESS_STEP,
     SLIP_SIGMA,
+    ZONE_ELEMENTS,
+    LawObjective,
     SlipFeatures,
     edge_threshold,
     feature_residuals,
@@ -35,6 +38,7 @@ from slipwave.fit import (
 from slipwave.fits import fits_table
 from slipwave.io import read_acquisition
 from slipwave.setup import TestSetup, read_test_setup
+from slipwave.solver import SolverCache
 
 CELLS = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
 TRUTH = {"fs": 0.9, "fd": 0.6}
@@ -328,3 +332,22 @@ def test_fits_table_reads_every_law(tmp_path):
     (tmp_path / "f.json").write_text(json.dumps(valid_fit()))
     assert main(["fits", str(tmp_path / "f.json"), "-o", str(tmp_path / "fits.csv")]) == 0
     assert pd.read_csv(tmp_path / "fits.csv")["law"].tolist() == ["coulomb"]
+
+
+def test_a_slip_weakening_law_keeps_its_process_zone_resolved_by_the_fit_mesh(virtual):
+    """Dc is raised to the shortest whose zone spans ZONE_ELEMENTS elements, no shorter."""
+    _, csv = virtual
+    recording = read_acquisition(csv)
+    setup = read_test_setup(recording, CELLS)
+    events = measured_events(recording)
+    objective = LawObjective(setup, events, "slip-weakening", 80, 1.0, 0.0,
+                             DEFAULT_DETECTION, SolverCache())
+    shortest = objective.shortest_dc(0.9, 0.6)
+    zone = setup.process_zone(law_of("slip-weakening", {"fs": 0.9, "fd": 0.6, "dc": shortest}))
+    assert zone == pytest.approx(ZONE_ELEMENTS * setup["length_mm"] / 80)
+    assert objective.clip((0.9, 0.6, shortest / 10))[2] == pytest.approx(shortest, abs=1e-6)
+    assert objective.clip((0.9, 0.6, 2 * shortest))[2] == pytest.approx(2 * shortest, abs=1e-6)
+    # twice the mesh resolves half the Dc
+    finer = LawObjective(setup, events, "slip-weakening", 160, 1.0, 0.0, DEFAULT_DETECTION,
+                         SolverCache())
+    assert finer.shortest_dc(0.9, 0.6) == pytest.approx(shortest / 2)

@@ -11,7 +11,8 @@ length, the cohesive (process) zone of a slip front (Palmer and Rice 1973),
 which a mesh resolves with a few elements (Day et al. 2005). This module simulates a
 test along its load path at several meshes, reads each simulation's features as the
 fit does (:func:`slipwave.fit.simulated_events`, :func:`slipwave.fit.slip_features`)
-and tabulates how each moves when the mesh is doubled.
+and tabulates how each moves when the mesh is doubled (a slip-weakening law's
+process zone: :meth:`slipwave.setup.TestSetup.process_zone`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from slipwave.fit import (
     slip_features,
 )
 from slipwave.setup import TestSetup
-from slipwave.solver import Coulomb, SlipWeakening, SolverCache
+from slipwave.solver import Coulomb, SolverCache
 
 FEATURES: dict[str, str] = {
     "gross_slips": "gross slips (number)",
@@ -96,43 +97,6 @@ def feature_uncertainty(name: str, value: float) -> float:
         "first_slip_place": float("nan"),
     }
     return scales[name]
-
-
-def process_zone(setup: TestSetup, friction: Coulomb) -> float:
-    """The cohesive zone of a slip front under slip-weakening, mm (Palmer and Rice 1973).
-
-    G* Dc / ((fs - fd) sigma), with G* = E / (2 (1 + nu) (1 - nu)) the slab's
-    plane-strain shear modulus for a mode II front and sigma = N / (L w) the mean
-    contact pressure.
-
-    Parameters
-    ----------
-    setup
-        The test (its slab and normal load).
-    friction
-        The law; Coulomb's (no Dc) has no such length.
-
-    Returns
-    -------
-    float
-        The length, mm; 0 for a law without Dc.
-
-    Examples
-    --------
-    >>> from slipwave.setup import Setting
-    >>> values = {"youngs_modulus_mpa": 7.0, "poisson_ratio": 0.48, "normal_load_n": 85.0,
-    ...           "length_mm": 80.0, "width_mm": 10.0}
-    >>> setup = TestSetup("demo", {k: Setting(v, "example") for k, v in values.items()},
-    ...                   "frame")
-    >>> round(process_zone(setup, SlipWeakening(fs=0.9, fd=0.6, dc=0.1)), 1)
-    14.3
-    """
-    if not isinstance(friction, SlipWeakening):
-        return 0.0
-    nu = setup["poisson_ratio"]
-    shear = setup["youngs_modulus_mpa"] / (2.0 * (1.0 + nu) * (1.0 - nu))
-    pressure = setup["normal_load_n"] / (setup["length_mm"] * setup["width_mm"])
-    return shear * friction.dc / ((friction.fs - friction.dynamic) * pressure)
 
 
 def first_slip_x(simulation: xr.Dataset) -> float:

@@ -21,7 +21,15 @@ import xarray as xr
 
 from slipwave.defaults import TRAVEL_STEP_MM
 from slipwave.errors import SlipwaveError, SolverError
-from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, simulate, simulation_memory
+from slipwave.solver import (
+    Coulomb,
+    LoadPath,
+    Slab,
+    SlipWeakening,
+    SolverCache,
+    simulate,
+    simulation_memory,
+)
 from slipwave.validation import setup_value_problem
 
 GEOMETRY = {
@@ -142,6 +150,40 @@ class TestSetup:
                 f"test {self.test_id!r}: the solver failed at {err} with {friction} and "
                 f"{elements} elements; a setup far from a compliant slab's does that: check "
                 f"{settings}") from err
+
+    def process_zone(self, friction: Coulomb) -> float:
+        """The cohesive zone of a slip front under slip-weakening, mm (Palmer and Rice 1973).
+
+        G* Dc / ((fs - fd) sigma), with G* = E / (2 (1 + nu) (1 - nu)) the slab's
+        plane-strain shear modulus for a mode II front and sigma = N / (L w) the mean
+        contact pressure: the length a mesh must resolve for the law's predictions not
+        to depend on it (docs: "Mesh convergence").
+
+        Parameters
+        ----------
+        friction
+            The law; Coulomb's (no Dc) has no such length.
+
+        Returns
+        -------
+        float
+            The length, mm; 0 for a law without Dc.
+
+        Examples
+        --------
+        >>> values = {"youngs_modulus_mpa": 7.0, "poisson_ratio": 0.48,
+        ...           "normal_load_n": 85.0, "length_mm": 80.0, "width_mm": 10.0}
+        >>> setup = TestSetup("demo", {k: Setting(v, "example") for k, v in values.items()},
+        ...                   "frame")
+        >>> round(setup.process_zone(SlipWeakening(fs=0.9, fd=0.6, dc=0.1)), 1)
+        14.3
+        """
+        if not isinstance(friction, SlipWeakening):
+            return 0.0
+        nu = self["poisson_ratio"]
+        shear = self["youngs_modulus_mpa"] / (2.0 * (1.0 + nu) * (1.0 - nu))
+        pressure = self["normal_load_n"] / (self["length_mm"] * self["width_mm"])
+        return shear * friction.dc / ((friction.fs - friction.dynamic) * pressure)
 
     def simulation_memory(self, elements: int, sample_rate: float) -> int:
         """Bytes a simulation of the test takes at its peak, estimated before it starts.
