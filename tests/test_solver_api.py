@@ -12,7 +12,7 @@ from slipwave.cli import main
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.io import read_dataset
 from slipwave.plot import plot_zones
-from slipwave.solver import Body, Coulomb, LoadPath, Slab, SolverCache, simulate
+from slipwave.solver import Body, Coulomb, LoadPath, Slab, SolverCache, active_set, simulate
 from slipwave.solver import contact as contact_module
 from slipwave.solver import slab as slab_module
 
@@ -207,3 +207,29 @@ def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys):
     for kernel in report["kernels"].values():
         assert kernel["loaded"] + kernel["compiled"] >= 1 and kernel["cache_path"]
     assert "kernels" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("spread", [1e9, 1e11])
+def test_an_ill_conditioned_state_is_not_inverted_afresh_at_every_solve(spread):
+    """Refinement aims at what a fresh inverse reaches: no O(m^3) rebuild per solve."""
+    rng = np.random.default_rng(3)
+    n = 30
+    basis, _ = np.linalg.qr(rng.normal(size=(2 * n, 2 * n)))
+    stiffness = basis @ np.diag(np.logspace(0, np.log10(spread), 2 * n)) @ basis.T
+    solver = active_set.zone_solver(0.5 * (stiffness + stiffness.T), np.zeros(n))
+    state = np.full(n, active_set.STICK, dtype=np.int8)
+    state[:25] = active_set.SLIP
+    mu = np.where(state == active_set.SLIP, 0.5, 0.0)
+    assert active_set.move_to(solver, state, mu)
+    active_set.set_base(solver, np.zeros(n))
+    u, r = np.empty(2 * n), np.empty(2 * n)
+    rebuilds = []
+    for dx in (0.01, 0.02, 0.03, 0.04):
+        active_set.solve(solver, active_set.flat(dx, 0.0, None, None, np.inf), u, r)
+        rebuilds.append(solver.counts[active_set.REBUILDS])
+        slipping = np.flatnonzero(state == active_set.SLIP)
+        equations = r[slipping] - 0.5 * r[n + slipping]
+        assert np.abs(equations).max() <= 1e-11 * np.abs(r).max()
+    assert rebuilds[-1] == rebuilds[0]  # the later solves refine, they do not rebuild
+    # the well-conditioned state met REFINE_ABOVE; the other found what it can reach
+    assert (solver.accuracy[0] > active_set.REFINE_ABOVE) == (spread > 1e10)

@@ -15,10 +15,11 @@ one or two free displacements (a bordered inverse, or its reduction: O(m^2) for 
 free displacements), and a slipping node's new coefficient changes one row
 (Sherman-Morrison, O(m^2)); the increment's active set, which changes a few nodes
 per iteration, then never factorises. Each solve checks its residual: above
-:data:`REFINE_ABOVE` it takes a step of iterative refinement, and if that is not
-enough the inverse is formed again from scratch (Gaussian elimination), as it is
-whenever that is cheaper than the updates or an update meets a vanishing pivot. A
-state that is singular (no inverse) is reported as such, never solved.
+:data:`REFINE_ABOVE` (or :data:`ACCURACY_MARGIN` times what a freshly formed inverse
+reached on the state, when that is more) it takes a step of iterative refinement, and
+if that is not enough the inverse is formed again from scratch (Gaussian elimination),
+as it is whenever that is cheaper than the updates or an update meets a vanishing
+pivot. A state that is singular (no inverse) is reported as such, never solved.
 
 The increment's loop (:func:`iterate`: the algorithm of
 :meth:`slipwave.solver.contact.Body.solve_increment`, whose docstring and module
@@ -54,6 +55,16 @@ FAST = {"reassoc", "contract"}
 REFINE_ABOVE = 1e-12
 """Relative residual of a solve (scaled by the largest contact force) above which it
 is refined: a few hundred times rounding, far below the solver's 1e-8 tolerance."""
+
+ACCURACY_MARGIN = 10.0
+"""A solve is refined above this many times the residual that a freshly formed inverse
+reached (when that exceeds :data:`REFINE_ABOVE`): on an ill-conditioned zone state (a
+tall slab on a fine mesh) no update can beat a fresh inverse, and forming one again
+at every solve (O(m^3)) bought nothing."""
+
+ACCURACY_CAP = 1e-10
+"""The largest residual of a fresh inverse taken as the body's accuracy (refinement
+then aims at 1e-9, ten times below the increments' tolerance)."""
 
 # counters of ZoneSolver.counts (PENDING: the rank-one terms not yet added to the inverse)
 SIZE, SOLVES, ADDED, REMOVED, ROWS_CHANGED, REBUILDS, REFINEMENTS, INCREMENTS, PENDING = \
@@ -110,6 +121,10 @@ class ZoneSolver(NamedTuple):
         (3, 2n): the inverse times each known product's part in the equations
         (:func:`_flat_terms`), kept along with the inverse: a solve is then O(n m)
         products, no pass over the inverse.
+    accuracy
+        (1,): the relative residual that the last inverse formed afresh for accuracy
+        reached, refined, when that missed the aim (0 before any): what refinement
+        can aim at on this body (:data:`ACCURACY_MARGIN`).
 
     """
 
@@ -129,6 +144,7 @@ class ZoneSolver(NamedTuple):
     pending_u: np.ndarray
     pending_v: np.ndarray
     responses: np.ndarray
+    accuracy: np.ndarray
 
 
 class Flat(NamedTuple):
@@ -172,7 +188,7 @@ def zone_solver(stiffness: np.ndarray, initial_gap: np.ndarray) -> ZoneSolver:
         position=np.full(n2, -1, dtype=np.int64),
         counts=np.zeros(len(COUNTERS), dtype=np.int64),
         pending_u=np.zeros((PENDING_TERMS, n2)), pending_v=np.zeros((PENDING_TERMS, n2)),
-        responses=np.zeros((3, n2)))
+        responses=np.zeros((3, n2)), accuracy=np.zeros(1))
     _refresh_known(solver)
     return solver
 
@@ -899,6 +915,7 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
     given_dy = 0.0 if fl.dy_unknown else fl.values[1]
     dx, dy = given_dx, given_dy
     motion = np.zeros(2)
+    aim = max(REFINE_ABOVE, ACCURACY_MARGIN * s.accuracy[0])
     for attempt in range(2):  # the second with the inverse formed afresh
         m = s.counts[SIZE]
         totals = _totals(s.known)
@@ -920,10 +937,10 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
         dx = motion[0] if fl.dx_unknown else given_dx
         dy = motion[1] if fl.dy_unknown else given_dy
         _assemble(s.base, s.known, s.dofs, s.columns, z, dx, dy, u, r)
-        if attempt == 1 or not regular:
+        if not regular:
             return dx, dy, regular
         rows, flat_rows, relative = _residuals(s.dofs, s.coefficient, m, fl, r, dx)
-        if relative <= REFINE_ABOVE:
+        if relative <= aim:
             return dx, dy, True
         # one step of iterative refinement: the same system for the residual
         s.counts[REFINEMENTS] += 1
@@ -939,8 +956,12 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
         dx += motion[0]
         dy += motion[1]
         _assemble(s.base, s.known, s.dofs, s.columns, z, dx, dy, u, r)
-        if _residuals(s.dofs, s.coefficient, m, fl, r, dx)[2] <= REFINE_ABOVE:
+        refined = _residuals(s.dofs, s.coefficient, m, fl, r, dx)[2]
+        if refined <= aim:
             _refresh_responses(s)  # their updates' rounding, cleared for the next solves
+            return dx, dy, True
+        if attempt == 1:  # an inverse formed afresh, refined, does no better: the state's
+            s.accuracy[0] = min(refined, ACCURACY_CAP)
             return dx, dy, True
         # the updates have lost accuracy: the inverse afresh
         dofs = np.empty(m, dtype=np.int64)
@@ -1285,7 +1306,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
             coefficient: np.ndarray, known: np.ndarray, base: np.ndarray,
             dofs: np.ndarray, position: np.ndarray, counts: np.ndarray,
             pending_u: np.ndarray, pending_v: np.ndarray, responses: np.ndarray,
-            flat_values: np.ndarray, dx_unknown: bool, dy_unknown: bool,
+            accuracy: np.ndarray, flat_values: np.ndarray, dx_unknown: bool, dy_unknown: bool,
             s_prev: np.ndarray, static: float, dynamic: float, law: np.ndarray,
             guess: np.ndarray, guess_sign: np.ndarray, heal: bool, u: np.ndarray,
             r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray, state: np.ndarray,
@@ -1304,7 +1325,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base, dofs, position
         The fields of the body's :class:`ZoneSolver`, in order; its kept inverse is
         moved along.
-    counts, pending_u, pending_v, responses
+    counts, pending_u, pending_v, responses, accuracy
         Its last fields.
     flat_values, dx_unknown, dy_unknown
         The fields of the increment's :class:`Flat`.
@@ -1334,7 +1355,7 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
 
     """
     s = ZoneSolver(K, KT, g0, sum_x, sum_y, inverse, columns, coefficient, known, base,
-                   dofs, position, counts, pending_u, pending_v, responses)
+                   dofs, position, counts, pending_u, pending_v, responses, accuracy)
     fl = Flat(flat_values, dx_unknown, dy_unknown)
     n = s_prev.size
     cascade = static > dynamic
