@@ -308,8 +308,10 @@ def _assemble(slab: Slab) -> _Assembly:
     # triplets stay small (at 320 elements: 70 MB for the whole mesh at once, 24 MB this way)
     for start in range(0, mesh.t.shape[1], _ELEMENTS_PER_CHUNK):
         chunk = np.arange(start, min(start + _ELEMENTS_PER_CHUNK, mesh.t.shape[1]))
-        stiffness += asm(deviatoric, Basis(mesh, element, intorder=2, elements=chunk))
-        stiffness += asm(volumetric, Basis(mesh, element, quadrature=centre, elements=chunk))
+        # the whole mesh's dof numbering made once (each basis would number it again)
+        shared = {"elements": chunk, "dofs": full.dofs, "disable_doflocs": True}
+        stiffness += asm(deviatoric, Basis(mesh, element, intorder=2, **shared))
+        stiffness += asm(volumetric, Basis(mesh, element, quadrature=centre, **shared))
 
     locations = full.doflocs
     is_x = np.zeros(stiffness.shape[0], dtype=bool)
