@@ -958,7 +958,8 @@ def solve(s: ZoneSolver, fl: Flat, u: np.ndarray, r: np.ndarray) -> tuple[float,
         _assemble(s.base, s.known, s.dofs, s.columns, z, dx, dy, u, r)
         refined = _residuals(s.dofs, s.coefficient, m, fl, r, dx)[2]
         if refined <= aim:
-            _refresh_responses(s)  # their updates' rounding, cleared for the next solves
+            if attempt == 0:  # the updates' rounding, cleared (a rebuild just did)
+                _refresh_responses(s)
             return dx, dy, True
         if attempt == 1:  # an inverse formed afresh, refined, does no better: the state's
             s.accuracy[0] = min(refined, ACCURACY_CAP)
