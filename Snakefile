@@ -9,7 +9,7 @@ import re
 from snakemake.utils import min_version, validate
 
 from slipwave.io.atomic import remove_stale_parts
-from slipwave.map import deal_rows, friction_grid, shard_count
+from slipwave.map import deal_rows, friction_grid, map_meshes, shard_count
 from slipwave.validation import load_schema, schema_path
 from slipwave.campaign import (
     cache_option,
@@ -45,17 +45,17 @@ TEST_IDS = list(campaign["test_id"])
 FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
 MAP_JOBS = deal_rows(config["map"]["height_ratios"], config["map"]["row_jobs"])
 MAP_SHARDS = shard_count(friction_grid(*config["map"]["frictions"]), config["map"]["shard_size"])
-MAP_SHARD_FILES = [
-    f"results/map/rows/job{job}-{shard}.nc"
-    for job in range(len(MAP_JOBS))
-    for shard in range(MAP_SHARDS)
-]
+# the map at its mesh, and at the coarser mesh its band (where it still moves) is drawn from
+MAP_ELEMENTS, *MAP_BAND_ELEMENTS = map_meshes(
+    config["map"]["elements"], config["map"]["band_elements"]
+)
 
 
 wildcard_constraints:
     test_id="|".join(map(re.escape, TEST_IDS)) or "no-tests",
     job=r"\d+",
     shard=r"\d+",
+    elements=r"\d+",
 
 
 # A job killed outright (out of memory, SIGKILL) leaves its half-written output's

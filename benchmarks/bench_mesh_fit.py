@@ -60,7 +60,7 @@ def one(job: tuple[int, int, int]) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as folder:
         recording = read_acquisition(write_test(result, Path(folder))["csv"])
     fit = fit_test(read_test_setup(recording, CELLS), measured_events(recording),
-                   laws=[family], elements=fitted)
+                   laws=[family], elements=fitted, check_mesh=False)  # it fits 2M itself
     return {"truth": k, "made": made, "fitted": fitted,
             "parameters": fit["laws"][family]["parameters"],
             "seconds": time.perf_counter() - start}

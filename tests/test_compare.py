@@ -171,3 +171,7 @@ def test_place_on_map_picks_the_nearest_case():
     place = place_on_map(behaviour_map, 0.3, 0.6)
     assert place["behaviour"] == "ZD" and place["map_friction"] == 0.5
     assert place["inside_map"] and not place_on_map(behaviour_map, 0.3, 1.6)["inside_map"]
+    assert not place["in_mesh_band"]  # a map without its band
+    behaviour_map["mesh_band"] = (("height_ratio", "friction"), np.array([[0, 1], [0, 0]]))
+    assert not place_on_map(behaviour_map, 0.3, 0.6)["in_mesh_band"]
+    assert place_on_map(behaviour_map, 0.3, 0.9)["in_mesh_band"]

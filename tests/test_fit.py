@@ -267,8 +267,20 @@ def test_coulomb_fit_recovers_the_hidden_law_and_its_intervals_hold_it(virtual):
     # two gross slips in 90 s: fs is known to a few percent, and its interval says so
     assert law["fs"]["low"] <= TRUTH["fs"] <= law["fs"]["high"]
     assert fit["laws"]["coulomb"]["interval_method"] == "secant"
+    # the chosen law refitted at twice the mesh: each parameter's change recorded; fd,
+    # read after the gross slips, converges with the mesh under every law (docs "Mesh
+    # convergence"); Coulomb's law has no process zone
+    finer = fit["mesh_check"]
+    assert finer["elements"] == 160 and finer["law"] == "coulomb"
+    assert finer["process_zone_mm"] is None and finer["evaluations"] >= 3
+    for name, value in law.items():
+        refitted = finer["parameters"][name]["value"]
+        assert finer["change"][name] == pytest.approx((refitted - value["value"])
+                                                      / value["value"], abs=1e-5)
+    assert abs(finer["change"]["fd"]) < 0.02
     table = fits_table([fit])
     assert table.loc[0, "law"] == "coulomb" and table.loc[0, "height_ratio"] == 0.5
+    assert table.loc[0, "fs_mesh_change"] == finer["change"]["fs"]
     assert TestSetup.from_dict(fit["setup"]).to_dict() == fit["setup"]
     # one law's misfit on its own: the fit's at its optimum, and far worse off it
     fitted = {name: value["value"] for name, value in law.items()}
@@ -292,8 +304,8 @@ def test_a_law_fitted_without_coulomb_starts_from_its_coulomb_limit(virtual, law
     recording = read_acquisition(csv)
     setup = read_test_setup(recording, {"test_id": "v", **CELLS})
     fit = fit_test(setup, measured_events(recording), laws=[law], elements=80,
-                   max_evaluations=2)
-    assert list(fit["laws"]) == [law] and fit["chosen"] == law
+                   max_evaluations=2, check_mesh=False)
+    assert list(fit["laws"]) == [law] and fit["chosen"] == law and fit["mesh_check"] is None
     parameters = fit["laws"][law]["parameters"]
     assert parameters["fd"]["value"] == pytest.approx(TRUTH["fd"], rel=0.05)
     assert len(parameters) == (4 if law == "run-in" else 3)

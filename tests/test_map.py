@@ -19,8 +19,10 @@ from slipwave.map import (
     deal_rows,
     friction_grid,
     map_agreement,
+    map_meshes,
     map_row,
     map_table,
+    mesh_band,
     place_tests,
     representative_cases,
     shard,
@@ -90,6 +92,37 @@ def test_contiguity_and_agreement():
         map_agreement(grid, grid.assign_coords(friction=[0.5, 0.6, 0.7]))
 
 
+def _sequences(rows: list[str], frictions: list[float]) -> xr.Dataset:
+    return xr.Dataset({"sequence": (("height_ratio", "friction"),
+                                    np.array([list(r) for r in rows], dtype=object))},
+                      coords={"height_ratio": np.arange(1, len(rows) + 1) / 10,
+                              "friction": frictions})
+
+
+def test_the_band_holds_each_moved_case_and_its_neighbours_in_f_only():
+    frictions = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]
+    fine = _sequences(["aaaabbb", "aaaaaaa"], frictions)
+    coarse = _sequences(["aabbbbb", "aaaaaac"], frictions)  # two moves at H/L 0.1, one at 0.2
+    assert mesh_band(fine, coarse, 0).values.tolist() == [[0, 0, 1, 1, 0, 0, 0],
+                                                          [0, 0, 0, 0, 0, 0, 1]]
+    band = mesh_band(fine, coarse, 2)
+    assert band.values.tolist() == [[1, 1, 1, 1, 1, 1, 0], [0, 0, 0, 0, 1, 1, 1]]
+    assert band.dims == ("height_ratio", "friction") and band.attrs["units"] == "1"
+    assert not mesh_band(fine, fine, 3).values.any()
+    with pytest.raises(SlipwaveError, match="different friction"):
+        mesh_band(fine, coarse.assign_coords(friction=np.array(frictions) + 0.01), 1)
+    with pytest.raises(SlipwaveError, match="need 0 or more"):
+        mesh_band(fine, coarse, -1)
+
+
+def test_the_band_comes_from_a_coarser_mesh_or_none():
+    assert map_meshes(320, 160) == [320, 160]
+    assert map_meshes(40, 0) == [40]
+    with pytest.raises(SlipwaveError, match="band_elements 320: the band is drawn from a "
+                                            "coarser map"):
+        map_meshes(320, 320)
+
+
 def test_tests_are_placed_by_their_slenderness_and_measured_ratio():
     summary = pd.DataFrame({"test_id": ["a", "b", "c"], "static_ratio_mean": [1.0, 0.8, np.nan],
                             "static_ratio_ci_low": [0.95, 0.7, np.nan],
@@ -108,6 +141,16 @@ def test_figures_draw(small_map, tmp_path):
     path = tmp_path / "map.png"
     figure.savefig(path)
     assert path.stat().st_size > 10_000
+    assert not [p for p in axes.patches if p.get_hatch()]
+    # the band hatched, one patch per run along f, and named in the legend
+    banded = small_map.copy()
+    banded["mesh_band"] = (("height_ratio", "friction"), np.array([[1, 1, 0], [0, 0, 1]]))
+    banded.attrs.update(band_elements=20, contact_elements=40)
+    axes = plot_map(banded).axes[0]
+    assert len([p for p in axes.patches if p.get_hatch() == "////"]) == 2
+    assert [t.get_text() for t in axes.get_legend().get_texts()] == [
+        "still moves with the mesh (20 -> 40 elements)"]
+    assert "at 40 elements" in axes.get_title()
     with pytest.raises(SlipwaveError, match="no simulation"):
         plot_zone_histories([])
 
@@ -138,6 +181,20 @@ def test_map_command_rows_then_assembly(tmp_path, capsys):
     assert whole.attrs["normal_control"] == "force" and whole.attrs["normal_friction"] == 0
     assert len(pd.read_csv(out["map.csv"])) == 6
     assert all(out[name].stat().st_size > 5_000 for name in ("map.png", "zones.png"))
+    # the band from the same rows at a coarser mesh: the cases whose succession moved
+    coarse = tmp_path / "coarse.nc"
+    assert main(["map", "row", "--height-ratio", "0.3", "0.6", "--frictions", "0.5", "1.0",
+                 "0.25", "--elements", "16", "-o", str(coarse)]) == 0
+    assert main(["map", "assemble", *map(str, rows), "--band-rows", str(coarse),
+                 "--band-steps", "0", "-o", str(tmp_path / "banded.nc"), "--csv",
+                 str(tmp_path / "banded.csv"), "--legend", str(tmp_path / "banded.md")]) == 0
+    banded = read_dataset(tmp_path / "banded.nc")
+    moved = banded["sequence"].values != read_dataset(coarse)["sequence"].values
+    assert (banded["mesh_band"].values == moved).all()
+    assert banded.attrs["band_elements"] == 16 and banded.attrs["band_steps"] == 0
+    assert f"{int(moved.sum())} successions differ between 16 and 40 elements" in (
+        capsys.readouterr().out)
+    assert "mesh_band" in pd.read_csv(tmp_path / "banded.csv").columns
     # the same rows computed by one job, in one file: the same map
     both = tmp_path / "both.nc"
     assert main(["map", "row", "--height-ratio", "0.6", "0.3", "--frictions", "0.5", "1.0",

@@ -142,6 +142,11 @@ def test_full_report_says_what_it_compares(built):
     _, _, detection, fitted = built
     assert f"DG/DD jump ratio of {detection:.3g} or more, read off the simulated slips" in html
     assert f"the fit judged its laws' features by {fitted:.3g}" in html
+    # the chosen law at twice the mesh, each parameter's change, and what Coulomb's is
+    assert "The chosen law refitted at 48 elements, twice the fit's 24" in html
+    assert "has no length scale: its coefficients are the mesh-dependent limit" in html
+    campaign = pages["campaign"].read_text()
+    assert "fs, fd at twice the mesh" in campaign and campaign.count(" %, ") >= 1
 
 
 def test_figures_drawn_on_two_processes_are_those_drawn_on_one(built):

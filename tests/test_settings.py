@@ -42,7 +42,11 @@ REACHES = [
     ("fit", "elements", 60, {"fit"}),
     ("fit", "max_evaluations", 5, {"fit"}),
     ("fit", "load_calibration", 0.01, {"fit"}),
-    ("map", "elements", 80, {"map_row"}),
+    ("fit", "mesh_check", False, {"fit"}),
+    # the rows' paths name their mesh: the assembly's command changes with it
+    ("map", "elements", 640, {"map_row", "map_assemble"}),
+    ("map", "band_elements", 80, {"map_row", "map_assemble"}),
+    ("map", "band_steps", 1, {"map_assemble"}),
     ("map", "frictions", [0.2, 1.4, 0.02], {"map_row"}),
     ("map", "normal_control", "displacement", {"map_row"}),
     ("map", "normal_friction", True, {"map_row"}),

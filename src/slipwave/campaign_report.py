@@ -11,6 +11,7 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import xarray as xr
 
@@ -54,7 +55,9 @@ def campaign_summary(summary: pd.DataFrame, fits: pd.DataFrame | None,
             fit = fitted.loc[test_id]
             row.update(height_ratio=fit["height_ratio"], law=fit["law"],
                        fs=fit["fs"], fs_low=fit["fs_low"], fs_high=fit["fs_high"],
-                       fd=fit["fd"], fd_low=fit["fd_low"], fd_high=fit["fd_high"])
+                       fd=fit["fd"], fd_low=fit["fd_low"], fd_high=fit["fd_high"],
+                       mesh_change=[fit.get(f"{name}_mesh_change", np.nan)
+                                    for name in ("fs", "fd")])
         compared = comparisons.get(test_id, {})
         row["verdicts"] = compared.get("verdicts", {})
         row["behaviour"] = (compared.get("map") or {}).get("behaviour", "")

@@ -205,15 +205,21 @@ def _fit(args: argparse.Namespace) -> None:
     detection = _detection_settings(args)
     events = measured_events(recording, detection=detection)
     setup = read_test_setup(recording, cells)
-    require_memory(setup.simulation_memory(args.elements, float(events.attrs["sample_rate"])),
-                   f"fitting test {setup.test_id!r} with {args.elements} elements",
+    check_mesh = args.mesh_check == "on"
+    finest = 2 * args.elements if check_mesh else args.elements
+    require_memory(setup.simulation_memory(finest, float(events.attrs["sample_rate"])),
+                   f"fitting test {setup.test_id!r} with {args.elements} elements"
+                   + (f" (checked at {finest})" if check_mesh else ""),
                    limit_gb=args.memory_limit)
     fit = fit_test(setup, events, laws=args.laws, elements=args.elements,
                    max_evaluations=args.max_evaluations,
                    calibration_error=args.load_calibration, detection=detection,
-                   cache=_solver_cache(args))
+                   cache=_solver_cache(args), check_mesh=check_mesh)
     stamp(fit, None, recording.attrs)
     seconds = {law: entry.pop("seconds") for law, entry in fit["laws"].items()}
+    finer = fit["mesh_check"]
+    if finer is not None:
+        seconds["mesh_check"] = finer.pop("seconds")
     with atomic_output(args.output) as temporary:  # (wall times to the log only)
         temporary.write_text(json.dumps(fit, indent=2), encoding="utf-8")
     for law, entry in fit["laws"].items():
@@ -222,6 +228,10 @@ def _fit(args: argparse.Namespace) -> None:
         print(f"{law}: {values}; misfit {entry['misfit']:.1f} over {entry['features']} "
               f"features, AIC {entry['aic']:.1f}{' (rejected)' if entry['rejected'] else ''}, "
               f"{entry['evaluations']} simulations in {seconds[law]:.0f} s")
+    if finer is not None:
+        changes = ", ".join(f"{name} {change:+.2%}" for name, change in finer["change"].items())
+        print(f"{finer['law']} refitted at {finer['elements']} elements: {changes}; "
+              f"{finer['evaluations']} simulations in {seconds['mesh_check']:.0f} s")
     print(f"{args.recording} -> {args.output}: {fit['chosen']}")
 
 
@@ -587,9 +597,18 @@ def _map_row(args: argparse.Namespace) -> None:
 
 def _map_assemble(args: argparse.Namespace) -> None:
     from slipwave.io import atomic_output, read_dataset, write_dataset, write_table
-    from slipwave.map import assemble_map, behaviour_legend, map_table
+    from slipwave.map import assemble_map, behaviour_legend, map_table, mesh_band
 
     whole = assemble_map([read_dataset(path, "map row") for path in args.rows])
+    if args.band_rows:
+        coarser = assemble_map([read_dataset(path, "map row") for path in args.band_rows])
+        whole["mesh_band"] = mesh_band(whole, coarser, args.band_steps)
+        whole.attrs.update(band_elements=coarser.attrs["contact_elements"],
+                           band_steps=args.band_steps)
+        moved = int((whole["sequence"].values != coarser["sequence"].values).sum())
+        print(f"{moved} successions differ between {coarser.attrs['contact_elements']} and "
+              f"{whole.attrs['contact_elements']} elements; the band (+-{args.band_steps} f "
+              f"steps) covers {float(whole['mesh_band'].mean()):.1%} of the map")
     write_dataset(whole, args.output)
     write_table(map_table(whole), args.csv)
     with atomic_output(args.legend) as temporary:
@@ -808,7 +827,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="E, MPa (%(default)s)")
     sim.add_argument("--poisson-ratio", type=float, default=default.POISSON_RATIO,
                      help="nu (%(default)s)")
-    sim.add_argument("--elements", type=_setting("map", "elements"), default=default.MAP_ELEMENTS,
+    sim.add_argument("--elements", type=_setting("map", "elements"), default=default.SLAB_ELEMENTS,
                      help="elements along the contact (%(default)s)")
     sim.add_argument("--holder", choices=["clamped", "free"], default="clamped")
     sim.add_argument("--fs", type=float, default=None,
@@ -877,6 +896,12 @@ def build_parser() -> argparse.ArgumentParser:
     assemble.add_argument("--csv", type=Path, required=True, help="map table (CSV)")
     assemble.add_argument("--legend", type=Path, required=True,
                           help="the behaviours in words (Markdown)")
+    assemble.add_argument("--band-rows", type=_input, nargs="+", default=None,
+                          help="the same cases at a coarser mesh: the band where the map "
+                          "still moves with the mesh is drawn from them")
+    assemble.add_argument("--band-steps", type=_setting("map", "band_steps"),
+                          default=default.MAP_BAND_STEPS,
+                          help="f steps the band is widened by on each side (%(default)s)")
     assemble.set_defaults(run=_map_assemble)
     figures = steps.add_parser("figures", parents=[cache],
                                help="draw the map and one zone history per "
@@ -949,6 +974,10 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--load-calibration", type=_setting("fit", "load_calibration"),
                      default=default.LOAD_CALIBRATION,
                      help="relative calibration uncertainty of each load cell (%(default)s)")
+    fit.add_argument("--mesh-check", choices=["on", "off"],
+                     default="on" if default.FIT_MESH_CHECK else "off",
+                     help="refit the chosen law at twice the mesh and record each parameter's "
+                     "change (%(default)s)")
     fit.set_defaults(run=_fit)
 
     compare = commands.add_parser(

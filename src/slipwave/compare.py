@@ -360,7 +360,9 @@ def place_on_map(behaviour_map: xr.Dataset, height_ratio: float, friction: float
     -------
     dict
         ``height_ratio``, ``friction`` (the test's), ``map_height_ratio``,
-        ``map_friction`` (the case's), ``behaviour``, ``sequence``, ``inside_map``.
+        ``map_friction`` (the case's), ``behaviour``, ``sequence``, ``inside_map``,
+        ``in_mesh_band`` (whether the case lies in the band where the map still moves
+        with the mesh; false when the map has no band).
 
     """
     case = behaviour_map.sel(height_ratio=height_ratio, friction=friction, method="nearest")
@@ -373,7 +375,8 @@ def place_on_map(behaviour_map: xr.Dataset, height_ratio: float, friction: float
             "map_friction": float(case["friction"]), "behaviour": name,
             "sequence": str(case["sequence"].values),
             "inside_map": bool(h.min() <= height_ratio <= h.max()
-                               and f.min() <= friction <= f.max())}
+                               and f.min() <= friction <= f.max()),
+            "in_mesh_band": bool(case["mesh_band"]) if "mesh_band" in case else False}
 
 
 def verdict_counts(table: pd.DataFrame) -> Mapping[str, int]:

@@ -71,13 +71,18 @@ NORMAL_FRICTION = True
 pressed with friction, as on the bench)."""
 TRAVEL_STEP_MM = 0.03
 """The actuator's travel per load step when a test is driven through its machine, mm."""
+SLAB_ELEMENTS = 160
+"""Elements along the contact of a slab simulated alone (``Slab``, ``slipwave simulate``
+without a fit)."""
 BENCH_ELEMENTS = 160
 """Elements along the contact of the virtual bench's tests: finer than the fit's, so
 that no benchmark fits a test with the mesh that made it."""
 
 # The behaviour map (slipwave.map; config section ``map``).
 MAP_ELEMENTS: int = _setting("map", "elements")
-"""Elements along the contact of the map's cases (and of a slab simulated alone)."""
+"""Elements along the contact of the map's cases."""
+MAP_BAND_STEPS: int = _setting("map", "band_steps")
+"""f steps by which the map's band (where it still moves with the mesh) is widened."""
 MIN_ZONE_MM: float = _setting("map", "min_zone_mm")
 """Shortest zone (mm) that decides a behaviour."""
 MAP_NORMAL_CONTROL: str = _setting("map", "normal_control")
@@ -120,6 +125,8 @@ FIT_ELEMENTS: int = _setting("fit", "elements")
 """Elements along the contact in the fit's simulations (and the test's simulation)."""
 FIT_MAX_EVALUATIONS: int = _setting("fit", "max_evaluations")
 """Simulations of each law's local search, after its starting scan."""
+FIT_MESH_CHECK: bool = _setting("fit", "mesh_check")
+"""Whether the chosen law is refitted at twice the fit's mesh (its parameters' change)."""
 LOAD_CALIBRATION: float = _setting("fit", "load_calibration")
 """Relative calibration uncertainty of each load cell (T and N), one standard deviation."""
 SAMPLE_RATE_HZ = 100.0

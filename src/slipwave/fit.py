@@ -43,7 +43,12 @@ import xarray as xr
 from scipy.optimize import minimize
 
 from slipwave.compare import recurrence
-from slipwave.defaults import FIT_ELEMENTS, FIT_MAX_EVALUATIONS, LOAD_CALIBRATION
+from slipwave.defaults import (
+    FIT_ELEMENTS,
+    FIT_MAX_EVALUATIONS,
+    FIT_MESH_CHECK,
+    LOAD_CALIBRATION,
+)
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.setup import GEOMETRY, TestSetup
@@ -1089,7 +1094,8 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
             scan: Mapping[tuple[float, ...], SlipFeatures] | None = None,
             calibration_error: float = LOAD_CALIBRATION,
             detection: DetectionSettings = DEFAULT_DETECTION,
-            cache: SolverCache | None = None) -> LawFit:
+            cache: SolverCache | None = None,
+            starts: Sequence[tuple[float, ...]] | None = None) -> LawFit:
     """Fit one friction law to one test.
 
     Parameters
@@ -1117,6 +1123,9 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     cache
         The solver's cache (the slab's condensation and normal approach); ``None``: the
         fit's own.
+    starts
+        Where the search starts (the law's parameters in :data:`LAWS` order), in place
+        of the law's own starting scan: a local search from a known fit.
 
     Returns
     -------
@@ -1132,14 +1141,16 @@ def fit_law(setup: TestSetup, measured: pd.DataFrame, law: str, *,
     began = clock.perf_counter()
     objective = LawObjective(setup, measured, law, elements, threshold, calibration_error,
                            detection, cache or SolverCache())
-    starts = _starts(law, objective, measured, previous or {}, scan or {})
-    best = min(starts, key=objective)
-    if law == "coulomb":
+    local = starts is not None
+    points = ([objective.clip(theta) for theta in starts] if starts is not None
+              else _starts(law, objective, measured, previous or {}, scan or {}))
+    best = min(points, key=objective)
+    if law == "coulomb" and not local:
         # the scan's runs give fs by the first slip's T/|N|, finer than the scan's step
         first = _first_slip_fs(objective.features, objective.measured.first_ratio)
         if np.isfinite(first):
             best = min([best, objective.clip((first, best[1]))], key=objective)
-    if law == "run-in":
+    if law == "run-in" and not local:
         # fs_final alone along a line: the later gross slips' valley is narrow, and the
         # simplex, moving four parameters at once, steps over it
         k = LAWS[law].index("fs_final")
@@ -1357,11 +1368,61 @@ def misfit_intervals(history: list[tuple[tuple[float, ...], float]],
     return low, high, method
 
 
+def mesh_check(setup: TestSetup, measured: pd.DataFrame, fit: LawFit, *, elements: int,
+               max_evaluations: int = FIT_MAX_EVALUATIONS,
+               calibration_error: float = LOAD_CALIBRATION,
+               detection: DetectionSettings = DEFAULT_DETECTION,
+               cache: SolverCache | None = None) -> dict[str, Any]:
+    """The law refitted on a finer mesh: how much its parameters still follow the mesh.
+
+    A local search at ``elements`` (twice the fit's, in :func:`fit_test`) from the
+    fit's estimate, the gross slips told by the fit's own edge threshold, so that the
+    same measured features are matched. A law with a length scale (slip-weakening's Dc)
+    converges once its process zone spans a few elements; Coulomb's law with fs > fd
+    and run-in have none, and their coefficients are the mesh-dependent limit (docs:
+    "Mesh convergence").
+
+    Parameters
+    ----------
+    setup, measured
+        As in :func:`fit_law`.
+    fit
+        The law fitted on the fit's own mesh.
+    elements
+        The finer mesh.
+    max_evaluations, calibration_error, detection, cache
+        As in :func:`fit_law`.
+
+    Returns
+    -------
+    dict
+        ``elements``, ``law``, ``parameters`` (value, low, high, units at ``elements``),
+        ``change`` (each parameter's relative change from the fit's estimate), ``misfit``,
+        ``evaluations``, ``seconds`` and ``process_zone_mm`` (the law's process zone at
+        the fit's estimate, :meth:`~slipwave.setup.TestSetup.process_zone`; null for a
+        law without a length).
+
+    """
+    finer = fit_law(setup, measured, fit.law, threshold=fit.edge_threshold,
+                    elements=elements, max_evaluations=max_evaluations,
+                    calibration_error=calibration_error, detection=detection, cache=cache,
+                    starts=[tuple(fit.values.values())])
+    entry = finer.to_dict()
+    zone = setup.process_zone(law_of(fit.law, fit.values))
+    return {"elements": elements, "law": fit.law, "parameters": entry["parameters"],
+            "change": {name: round((finer.values[name] - value) / value, 6)
+                       for name, value in fit.values.items()},
+            "misfit": entry["misfit"], "evaluations": entry["evaluations"],
+            "seconds": entry["seconds"],
+            "process_zone_mm": round(zone, 4) if zone > 0 else None}
+
+
 def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = tuple(LAWS),
              elements: int = FIT_ELEMENTS, max_evaluations: int = FIT_MAX_EVALUATIONS,
              calibration_error: float = LOAD_CALIBRATION,
              detection: DetectionSettings = DEFAULT_DETECTION,
-             cache: SolverCache | None = None) -> dict[str, Any]:
+             cache: SolverCache | None = None,
+             check_mesh: bool = FIT_MESH_CHECK) -> dict[str, Any]:
     """Fit every law to a test and choose by AIC.
 
     Parameters
@@ -1374,6 +1435,8 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
         As in :func:`fit_law`.
     cache
         The solver's cache, shared by every law's simulations; ``None``: the fit's own.
+    check_mesh
+        Refit the chosen law at twice ``elements`` (:func:`mesh_check`).
 
     Returns
     -------
@@ -1382,7 +1445,8 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
         ``detection`` (:meth:`~slipwave.events.DetectionSettings.to_dict`),
         ``measured`` (gross and partial slip counts), ``laws`` (each
         :meth:`LawFit.to_dict` with ``delta_aic`` and ``rejected``), ``chosen`` (the
-        lowest AIC) and ``parameters`` (the chosen law's values).
+        lowest AIC), ``parameters`` (the chosen law's values) and ``mesh_check``
+        (:func:`mesh_check` at twice the mesh, or null).
 
     """
     unknown = [law for law in laws if law not in LAWS]
@@ -1400,6 +1464,9 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
                             calibration_error=calibration_error, detection=detection,
                             cache=cache)
     best = min(fits.values(), key=lambda fit: fit.aic)
+    finer = mesh_check(setup, measured, best, elements=2 * elements,
+                       max_evaluations=max_evaluations, calibration_error=calibration_error,
+                       detection=detection, cache=cache) if check_mesh else None
     laws_out = {}
     for law, fit in fits.items():
         entry = fit.to_dict()
@@ -1415,7 +1482,8 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, *, laws: Sequence[str] = 
                          "min_drop_n": round(float(measured.attrs.get("min_drop", 0.0)), 6)},
             "edge_threshold": round(threshold, 4),
             "laws": laws_out, "chosen": best.law,
-            "parameters": {name: round(value, 6) for name, value in best.values.items()}}
+            "parameters": {name: round(value, 6) for name, value in best.values.items()},
+            "mesh_check": finer}
 
 
 def chosen_law(fit: Mapping[str, Any]) -> Coulomb:

@@ -25,7 +25,9 @@ def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
     pandas.DataFrame
         ``test_id``, ``height_ratio``, ``law`` (chosen), ``gross_slips``, each
         parameter of each law as ``<law>_<name>``, ``_low``, ``_high``, each law's
-        ``<law>_delta_aic``, and the chosen law's ``fs``, ``fd`` with their intervals.
+        ``<law>_delta_aic``, and the chosen law's ``fs``, ``fd`` with their intervals
+        and, when the fit checked its mesh, their relative change at twice it
+        (``fs_mesh_change``, ``fd_mesh_change``; empty otherwise).
 
     """
     rows = []
@@ -36,9 +38,11 @@ def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
             "height_ratio": setup["height_mm"]["value"] / setup["length_mm"]["value"],
             "law": fit["chosen"], "gross_slips": fit["measured"]["gross_slips"]}
         chosen = fit["laws"][fit["chosen"]]["parameters"]
+        finer = fit.get("mesh_check") or {}
         for name in ("fs", "fd"):
             row[name] = chosen[name]["value"]
             row[f"{name}_low"], row[f"{name}_high"] = chosen[name]["low"], chosen[name]["high"]
+            row[f"{name}_mesh_change"] = finer.get("change", {}).get(name)
         for law, entry in fit["laws"].items():
             key = law.replace("-", "_")
             row[f"{key}_delta_aic"] = entry["delta_aic"]

@@ -254,6 +254,99 @@ def assemble_map(rows: Sequence[xr.Dataset]) -> xr.Dataset:
     return whole
 
 
+def map_meshes(elements: int, band_elements: int) -> list[int]:
+    """The meshes the map is computed at: its own, then the coarser one its band comes from.
+
+    Parameters
+    ----------
+    elements
+        Elements along the contact of the map (config ``map.elements``).
+    band_elements
+        Elements of the coarser map the band is drawn from (``map.band_elements``);
+        0: no band.
+
+    Returns
+    -------
+    list of int
+        ``[elements]`` or ``[elements, band_elements]``.
+
+    Raises
+    ------
+    SlipwaveError
+        If the band's mesh is not coarser than the map's.
+
+    Examples
+    --------
+    >>> map_meshes(320, 160)
+    [320, 160]
+    """
+    if not band_elements:
+        return [elements]
+    if band_elements >= elements:
+        raise SlipwaveError(f"map.band_elements {band_elements}: the band is drawn from a "
+                            f"coarser map than the map's own {elements} elements (or 0: "
+                            "no band)")
+    return [elements, band_elements]
+
+
+def mesh_band(whole: xr.Dataset, coarser: xr.Dataset, steps: int) -> xr.DataArray:
+    """Where the map's successions still move with the mesh.
+
+    A case is in the band when its succession of events differs from the same case's
+    in the map at a coarser mesh, or lies within ``steps`` f steps (at its H/L) of
+    such a case: a boundary that moved between the two meshes may move on by about
+    as much at a finer one (the documentation's "Mesh convergence" measures how
+    many of the changes at twice the map's mesh the band holds).
+
+    Parameters
+    ----------
+    whole
+        The map (:func:`assemble_map` or :func:`map_row`).
+    coarser
+        The same cases at a coarser mesh.
+    steps
+        f steps the band is widened by on each side.
+
+    Returns
+    -------
+    xarray.DataArray
+        ``height_ratio`` x ``friction``, 1 in the band, 0 elsewhere.
+
+    Raises
+    ------
+    SlipwaveError
+        If the two maps do not hold the same cases, or ``steps`` is negative.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> def grid(sequences):
+    ...     return xr.Dataset({"sequence": (("height_ratio", "friction"), [sequences])},
+    ...                       coords={"height_ratio": [0.5], "friction": [0.1, 0.2, 0.3, 0.4]})
+    >>> mesh_band(grid(["a", "a", "b", "b"]), grid(["a", "b", "b", "b"]), 1).values.tolist()
+    [[1, 1, 1, 0]]
+    """
+    if steps < 0:
+        raise SlipwaveError(f"map band of {steps} f steps: need 0 or more")
+    for name in ("height_ratio", "friction"):
+        if not np.array_equal(whole[name].values, coarser[name].values):
+            raise SlipwaveError(f"the band's map and the map hold different {name} values")
+    moved = whole["sequence"].values != coarser["sequence"].values
+    band = moved.copy()
+    for shift in range(1, steps + 1):
+        band[:, shift:] |= moved[:, :-shift]
+        band[:, :-shift] |= moved[:, shift:]
+    elements = whole.attrs.get("contact_elements", "the map's")
+    band_elements = coarser.attrs.get("contact_elements", "a coarser")
+    return xr.DataArray(
+        band.astype(np.int8), dims=("height_ratio", "friction"),
+        coords={"height_ratio": whole["height_ratio"], "friction": whole["friction"]},
+        attrs={"long_name": f"1 where the succession still moves with the mesh: it differs "
+                            f"between {band_elements} and {elements} elements within "
+                            f"{steps} f steps",
+               "units": "1"})
+
+
 def map_table(whole: xr.Dataset) -> pd.DataFrame:
     """One row per case: the map as a table (``map.csv``).
 

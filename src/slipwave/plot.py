@@ -10,6 +10,7 @@ import io
 import multiprocessing
 import signal
 from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -403,7 +404,9 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None, *,
 
     Each case is coloured by its behaviour (legend in words below the map), the
     regions named ZD and ZG are labelled on the map, and the cases whose first
-    opening is at the right edge (the paper's L) are outlined by a dashed line.
+    opening is at the right edge (the paper's L) are outlined by a dashed line; the
+    cases of the map's band (``mesh_band``: where its succession still moves with the
+    mesh) are hatched.
     With ``tests`` (:func:`slipwave.map.place_tests`), each test is a point at its
     H/L and measured T/N at gross slips, with its confidence interval.
 
@@ -459,6 +462,13 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None, *,
     if np.unique(whole["L"].values).size > 1:
         ax.contour(hl, f, whole["L"].values.T.astype(float), levels=[0.5], colors="black",
                    linestyles="dashed", linewidths=1.0)
+    handles: list[Any] = []
+    if "mesh_band" in whole:
+        _hatch_band(ax, whole["mesh_band"].values, edges(hl), edges(f))
+        handles.append(Patch(fill=False, hatch="////", edgecolor="0.25", lw=0,
+                             label=f"still moves with the mesh "
+                             f"({whole.attrs['band_elements']} -> "
+                             f"{whole.attrs['contact_elements']} elements)"))
     for family in ("ZD", "ZG"):
         mask = np.isin(grid, ids[[n.startswith(family) for n in names]])
         if mask.any():
@@ -468,20 +478,22 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None, *,
                     fontweight="bold", color="black",
                     bbox={"boxstyle": "round", "fc": "white", "alpha": 0.7, "lw": 0})
     if tests is not None and len(tests):
-        ax.errorbar(tests["height_ratio"], tests["ratio"],
-                    yerr=[tests["ratio"] - tests["ci_low"], tests["ci_high"] - tests["ratio"]],
-                    fmt="o", color="black", mfc="white", ms=6, capsize=3,
-                    label=label)
+        handles.append(ax.errorbar(
+            tests["height_ratio"], tests["ratio"],
+            yerr=[tests["ratio"] - tests["ci_low"], tests["ci_high"] - tests["ratio"]],
+            fmt="o", color="black", mfc="white", ms=6, capsize=3, label=label))
         for _, test in tests.iterrows():
             ax.annotate(str(test["test_id"]), (test["height_ratio"], test["ratio"]),
                         xytext=(6, 4), textcoords="offset points", fontsize=8)
-        ax.legend(loc="upper right", fontsize=8)
+    if handles:
+        ax.legend(handles=handles, loc="upper right", fontsize=8)
     ax.set_xlabel("slab height over contact length H/L")
     ax.set_ylabel("friction coefficient f")
     control = ("N held" if whole.attrs.get("normal_control") == "force"
                else "normal displacement held")
-    ax.set_title(f"Interface behaviour, {grid.size} cases ({control}; dashed: first opening at "
-                 "the right edge, L)", fontsize=10)
+    ax.set_title(f"Interface behaviour, {grid.size} cases at {whole.attrs['contact_elements']} "
+                 f"elements ({control}; dashed: first opening at the right edge, L)",
+                 fontsize=10)
     legend_ax.set_axis_off()
     y = 1.0
     step = 1.0 / max(1, legend_rows)
@@ -493,6 +505,18 @@ def plot_map(whole: xr.Dataset, tests: pd.DataFrame | None = None, *,
         y -= step * (line.count("\n") + 1)
     return fig
 
+
+
+def _hatch_band(ax: Axes, band: np.ndarray, hl_edges: np.ndarray, f_edges: np.ndarray) -> None:
+    """Hatch the cases of the map's band, one rectangle per run along f at each H/L."""
+    for i, column in enumerate(band.astype(bool)):
+        padded = np.concatenate([[False], column, [False]])
+        starts = np.flatnonzero(~padded[:-1] & padded[1:])
+        stops = np.flatnonzero(padded[:-1] & ~padded[1:])
+        for start, stop in zip(starts, stops, strict=True):
+            ax.add_patch(Rectangle((hl_edges[i], f_edges[start]), hl_edges[i + 1] - hl_edges[i],
+                                   f_edges[stop] - f_edges[start], fill=False, hatch="////",
+                                   edgecolor="0.25", lw=0))
 
 
 def _family(name: str) -> str:

@@ -241,6 +241,46 @@ def png_base64(fig: Figure) -> str:
     return base64.b64encode(figure_png(fig)).decode("ascii")
 
 
+def mesh_check_rows(fit: dict[str, Any]) -> dict[str, Any] | None:
+    """What the page says of the fit's mesh: the chosen law refitted at twice it.
+
+    Parameters
+    ----------
+    fit
+        ``fit.json`` (:func:`slipwave.fit.fit_test`).
+
+    Returns
+    -------
+    dict or None
+        ``law``, ``elements`` (the finer mesh), ``fit_elements``, ``parameters`` (rows:
+        ``name``, ``value``, ``low``, ``high``, ``units`` at the finer mesh and
+        ``change``, relative), ``zone_mm`` and ``zone_elements`` (the process zone, and
+        how many elements of each mesh it spans; ``None`` for a law without a length);
+        ``None`` when the fit has no mesh check.
+
+    Examples
+    --------
+    >>> fit = {"elements": 80, "setup": {"length_mm": {"value": 80.0}}, "mesh_check": {
+    ...     "law": "coulomb", "elements": 160, "process_zone_mm": None,
+    ...     "change": {"fs": 0.0093},
+    ...     "parameters": {"fs": {"value": 0.91, "low": 0.89, "high": 0.93, "units": "1"}}}}
+    >>> rows = mesh_check_rows(fit)
+    >>> rows["parameters"][0]["change"], rows["zone_elements"]
+    (0.0093, None)
+    """
+    finer = fit.get("mesh_check")
+    if not finer:
+        return None
+    zone = finer["process_zone_mm"]
+    length = float(fit["setup"]["length_mm"]["value"])
+    return {"law": finer["law"], "elements": finer["elements"], "fit_elements": fit["elements"],
+            "parameters": [{"name": name, **value, "change": finer["change"][name]}
+                           for name, value in finer["parameters"].items()],
+            "zone_mm": zone,
+            "zone_elements": None if zone is None else
+            [zone * fit["elements"] / length, zone * finer["elements"] / length]}
+
+
 def pairing_summary(
     recording: xr.Dataset,
     events: xr.Dataset | None,
@@ -280,7 +320,8 @@ def pairing_summary(
     Returns
     -------
     dict
-        ``setup`` (rows with sources), ``laws`` (rows), ``chosen``, ``comparison``
+        ``setup`` (rows with sources), ``laws`` (rows), ``chosen``, ``mesh_check``
+        (the chosen law at twice the mesh: :func:`mesh_check_rows`), ``comparison``
         (rows) and ``verdicts``, figures (matplotlib, drawn by
         :func:`render_test_page`: ``signals``, ``zooms``,
         ``ratios``, ``space_time``, ``frames``, ``map``), ``placement``, ``missing``
@@ -291,7 +332,8 @@ def pairing_summary(
     """
     missing: list[str] = []
     summary: dict[str, Any] = {
-        "setup": [], "laws": [], "chosen": None, "comparison": [], "verdicts": {},
+        "setup": [], "laws": [], "chosen": None, "mesh_check": None, "comparison": [],
+        "verdicts": {},
         "figures": dict.fromkeys(("signals", "zooms", "ratios", "space_time", "frames",
                                   "map")),
         "placement": placement, "missing": missing, "edge_reference": None,
@@ -325,6 +367,7 @@ def pairing_summary(
                 "aic": entry["aic"], "delta_aic": entry["delta_aic"],
                 "evaluations": entry["evaluations"], "method": entry["interval_method"],
                 "nearby": entry.get("misfit_nearby")})
+        summary["mesh_check"] = mesh_check_rows(fit)
     if comparison is None:
         missing.append("no comparison: the test was not compared with a simulation")
     else:

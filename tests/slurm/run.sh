@@ -156,7 +156,7 @@ grep -Eo "slurm_logs/[^ ]+\.log" "$WORK/retried.log" | head -1 | sed 's/^/  its 
 grep -q "Trying to restart" "$WORK/retried.log" || fail "the failed job was not retried"
 say "failed at attempt 1 (30 MB), passed at attempt 2 (60 MB): $(grep -c 'Trying to restart' "$WORK/retried.log" || true) restart(s)"
 
-rm -f "$WORK/failing/results/map/rows/job0-0.nc" "$WORK/failing/results/map/map.nc"
+rm -f "$WORK/failing/results/map/rows/160/job0-0.nc" "$WORK/failing/results/map/map.nc"
 say "the same without retries: the job fails for good"
 set +e
 (cd "$WORK/failing" && snakemake results/map/map.nc "${FAILING[@]}" --retries 0 \
@@ -164,10 +164,10 @@ set +e
 status=$?
 set -e
 [ "$status" != 0 ] || fail "the run without retries did not fail"
-[ ! -e "$WORK/failing/results/map/rows/job0-0.nc" ] || fail "a failed job left its output"
-grep -q "needs about" "$WORK/failing/results/logs/map/job0-0.log" \
+[ ! -e "$WORK/failing/results/map/rows/160/job0-0.nc" ] || fail "a failed job left its output"
+grep -q "needs about" "$WORK/failing/results/logs/map/160/job0-0.log" \
     || fail "the job's log does not say why it failed"
-sed 's/^/  its log: /' "$WORK/failing/results/logs/map/job0-0.log" | tail -1
+sed 's/^/  its log: /' "$WORK/failing/results/logs/map/160/job0-0.log" | tail -1
 say "rerun with its memory raised (--set-resources map_row:mem_mb=1000)"
 (cd "$WORK/failing" && snakemake results/map/map.nc "${FAILING[@]}" \
     --set-resources map_row:mem_mb=1000 > "$WORK/rerun.log" 2>&1) \

@@ -58,9 +58,25 @@ def map_row_options(wildcards):
     settings = config["map"]
     friction = "on" if settings["normal_friction"] else "off"
     return (
-        f"--elements {settings['elements']} --normal-control {settings['normal_control']} "
+        f"--elements {wildcards.elements} --normal-control {settings['normal_control']} "
         f"--normal-friction {friction} --min-zone {settings['min_zone_mm']}"
     )
+
+
+def map_shard_files(elements):
+    """Every job's and shard's rows of the map at one mesh."""
+    return [
+        f"results/map/rows/{elements}/job{job}-{shard}.nc"
+        for job in range(len(MAP_JOBS))
+        for shard in range(MAP_SHARDS)
+    ]
+
+
+def map_band_options(wildcards, input):
+    if not input.band_rows:
+        return ""
+    rows = " ".join(shlex.quote(str(path)) for path in input.band_rows)
+    return f"--band-rows {rows} --band-steps {config['map']['band_steps']}"
 
 
 def setup_settings(wildcards):

@@ -18,6 +18,7 @@ rule fit:
         elements=config["fit"]["elements"],
         max_evaluations=config["fit"]["max_evaluations"],
         load_calibration=config["fit"]["load_calibration"],
+        mesh_check="on" if config["fit"]["mesh_check"] else "off",
         detection=detection_options,
         cache=cache_option(config),
     threads: 1
@@ -30,6 +31,7 @@ rule fit:
         "slipwave fit {input.recording:q} -o {output:q} "
         "--setting {params.settings} --laws {params.laws} --elements {params.elements} "
         "--max-evaluations {params.max_evaluations} "
-        "--load-calibration {params.load_calibration} {params.detection} {params.cache} "
+        "--load-calibration {params.load_calibration} --mesh-check {params.mesh_check} "
+        "{params.detection} {params.cache} "
         "> {log:q} 2>&1"
 

@@ -1,18 +1,19 @@
 # The behaviour map (the paper's figure 2): the H/L rows dealt to map.row_jobs jobs of
 # about equal cost (each runs its rows in one process, paying its start-up once), each
-# job's f range in shards when map.shard_size is set; then the pieces joined, the
-# behaviours named and the map drawn. On a cluster, the jobs are batched by their group
+# job's f range in shards when map.shard_size is set, at the map's mesh and at the
+# coarser mesh of its band (map.band_elements); then the pieces joined, the behaviours
+# named, the band where the map still moves with the mesh marked, and the map drawn. On a cluster, the jobs are batched by their group
 # (profiles/slurm: group-components).
 
 
 rule map_row:
-    """A job's H/L rows (or a shard of their friction coefficients)."""
+    """A job's H/L rows (or a shard of their friction coefficients) at one mesh."""
     input:
         ancient("results/solver.json"),
     output:
-        "results/map/rows/job{job}-{shard}.nc",
+        "results/map/rows/{elements}/job{job}-{shard}.nc",
     log:
-        "results/logs/map/job{job}-{shard}.log",
+        "results/logs/map/{elements}/job{job}-{shard}.log",
     params:
         height_ratios=lambda wildcards: " ".join(f"{r:g}" for r in MAP_JOBS[int(wildcards.job)]),
         frictions=" ".join(str(v) for v in config["map"]["frictions"]),
@@ -36,9 +37,11 @@ rule map_row:
 
 
 rule map_assemble:
-    """The map: map.nc (H/L x f: behaviour, succession, L, first events, T/N), map.csv, legend."""
+    """The map: map.nc (H/L x f: behaviour, succession, L, first events, T/N, the mesh's
+    band), map.csv, legend."""
     input:
-        MAP_SHARD_FILES,
+        rows=map_shard_files(MAP_ELEMENTS),
+        band_rows=[path for mesh in MAP_BAND_ELEMENTS for path in map_shard_files(mesh)],
     output:
         netcdf="results/map/map.nc",
         csv="results/map/map.csv",
@@ -47,6 +50,8 @@ rule map_assemble:
         ),
     log:
         "results/logs/map/map.log",
+    params:
+        band=map_band_options,
     threads: 1
     resources:
         mem_mb=scaled_memory(2000),
@@ -54,8 +59,8 @@ rule map_assemble:
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave map assemble {input:q} -o {output.netcdf:q} --csv {output.csv:q} "
-        "--legend {output.legend:q} > {log:q} 2>&1"
+        "slipwave map assemble {input.rows:q} {params.band} -o {output.netcdf:q} "
+        "--csv {output.csv:q} --legend {output.legend:q} > {log:q} 2>&1"
 
 
 rule map_figures:

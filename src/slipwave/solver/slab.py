@@ -36,8 +36,8 @@ from skfem.helpers import ddot, div, sym_grad
 
 from slipwave.defaults import (
     CONTACT_LENGTH_MM,
-    MAP_ELEMENTS,
     POISSON_RATIO,
+    SLAB_ELEMENTS,
     SLAB_HEIGHT_MM,
     SLAB_WIDTH_MM,
     YOUNGS_MODULUS_MPA,
@@ -86,7 +86,7 @@ class Slab:
     width: float = SLAB_WIDTH_MM
     youngs_modulus: float = YOUNGS_MODULUS_MPA
     poisson_ratio: float = POISSON_RATIO
-    elements: int = MAP_ELEMENTS
+    elements: int = SLAB_ELEMENTS
     holder: Literal["clamped", "free"] = "clamped"
     profile: Callable[[np.ndarray], np.ndarray] | None = field(default=None, compare=False)
     growth: float = 1.15
