@@ -239,6 +239,21 @@ def test_netcdf_round_trip_identical(write, tmp_path):
     assert back["T"].encoding["zlib"] is True
 
 
+def test_text_is_written_whole_whatever_the_width_it_was_read_with(tmp_path):
+    # two pieces read from files of different text widths, joined: the join keeps the
+    # first piece's encoding (<U5), which must not cut the longer text when written
+    short = xr.Dataset({"sequence": ("case", np.array(["a -> b"]))}, coords={"case": [0]})
+    long = xr.Dataset({"sequence": ("case", np.array(["a -> b -> gross sliding"]))},
+                      coords={"case": [1]})
+    pieces = []
+    for k, piece in enumerate((short, long)):
+        pieces.append(read_dataset(write_dataset(piece, tmp_path / f"piece{k}.nc")))
+    joined = xr.concat(pieces, dim="case")
+    assert joined["sequence"].encoding["dtype"].itemsize < 4 * 23
+    back = read_dataset(write_dataset(joined, tmp_path / "joined.nc"))
+    assert back["sequence"].values.tolist() == ["a -> b", "a -> b -> gross sliding"]
+
+
 def test_write_dataset_is_all_or_nothing(tmp_path):
     ds = xr.Dataset({"T": ("time", [1.0])}, coords={"time": [0.0]})
     target = tmp_path / "rec.nc"

@@ -53,6 +53,10 @@ def write_dataset(ds: xr.Dataset, path: str | PathLike[str]) -> Path:
         }
     encoding: dict[str, dict[str, Any]] = {}
     for name, variable in out.variables.items():
+        if variable.dtype.kind in "USO":
+            # text as its own width: an encoding inherited from a narrower piece (a
+            # concatenation keeps the first piece's) would cut the longer strings
+            variable.encoding = {k: v for k, v in variable.encoding.items() if k != "dtype"}
         if variable.dtype.kind in "fiu":
             encoding[str(name)] = {"zlib": True, "complevel": 4, "shuffle": True}
             if name in out.coords:
