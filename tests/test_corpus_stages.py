@@ -333,8 +333,8 @@ def test_a_comparison_json_without_test_id(made, out, capsys, tmp_path):
 def test_the_fit_checks_memory_before_simulating(made, out, capsys, monkeypatch):
     monkeypatch.setenv("SLIPWAVE_MEMORY_LIMIT_GB", "0.01")
     refused(capsys, ["fit", made["rec.nc"], "-o", out / "f.json", *SETTINGS],
-            r"fitting test 'hl050' with 80 elements needs about [\d.]+ GB, more than the limit "
-            r"of 0.01 GB")
+            r"fitting test 'hl050' with 80 elements \(checked at 160\) needs about [\d.]+ GB, "
+            r"more than the limit of 0.01 GB")
 
 
 def test_a_huge_slab_in_the_header_is_refused_before_the_fit(tmp_path, out, capsys):
@@ -343,7 +343,8 @@ def test_a_huge_slab_in_the_header_is_refused_before_the_fit(tmp_path, out, caps
     assert main(["ingest", str(csv), "-o", str(tmp_path / "r.nc")]) == 0
     capsys.readouterr()
     refused(capsys, ["fit", tmp_path / "r.nc", "-o", out / "f.json", *SETTINGS],
-            r"fitting test 'hl050' with 80 elements needs about [\d.]+ GB, more than the")
+            r"fitting test 'hl050' with 80 elements \(checked at 160\) needs about [\d.]+ GB, "
+            r"more than the")
 
 
 def test_simulate_checks_memory_of_its_sample_rate(made, out, capsys):
