@@ -6,7 +6,8 @@ increments until gross sliding, and sorts them by the succession of events at th
 interface. :func:`map_row` runs one H/L (one geometry: the slab is condensed once)
 over every f; :func:`assemble_map` joins the rows and numbers the behaviours;
 :func:`plot_map` draws the figure and :func:`behaviour_legend` says in words what
-each behaviour is.
+each behaviour is. :func:`mesh_band` marks where the map still moves with the mesh
+(the same cases at a coarser mesh, :func:`map_meshes`).
 """
 
 from __future__ import annotations
