@@ -13,9 +13,12 @@ from slipwave.convergence import (
     mesh_changes,
     simulated_summary,
 )
+from slipwave.errors import SlipwaveError
 from slipwave.fit import SlipFeatures
 from slipwave.setup import Setting, TestSetup
 from slipwave.solver import Coulomb, SlipWeakening
+from slipwave.solver.contact import OPEN
+from slipwave.solver.slab import rounded_corners
 
 
 def _setup(duration: float = 120.0) -> TestSetup:
@@ -44,6 +47,23 @@ def test_a_simulation_is_summed_up_feature_by_feature_its_first_slip_at_the_righ
     # the flat drags the slab towards +x: the trailing (right) corner slips first
     assert 0.4 < summary["first_slip_place"] <= 0.5
     assert 0.5 < summary["first_slip_ratio"] < 0.9
+
+
+def test_rounded_corners_lift_the_contact_ends_off_the_flat():
+    setup = _setup()
+    corners = rounded_corners(4.0, 80.0)
+    rounded = setup.simulate(Coulomb(fs=0.9, fd=0.6), 40, profile=corners)
+    sharp = setup.simulate(Coulomb(fs=0.9, fd=0.6), 40)
+    # the last 4 mm (two elements) curve up by 4 mm: the end nodes never touch the flat
+    assert (rounded["state"].values[:, [0, -1]] == OPEN).all()
+    assert not (sharp["state"].values[:, [0, -1]] == OPEN).all()
+    assert rounded.attrs["slab_profile"] != "flat"
+    # the first slip where the face meets the flat, at the rounding's start (36 mm)
+    first = simulated_summary(setup, Coulomb(fs=0.9, fd=0.6), 40, min_drop=0.5,
+                              sample_rate=100.0, profile=corners)["first_slip_place"]
+    assert first == pytest.approx(36.0 / 80.0)
+    with pytest.raises(SlipwaveError, match="need 0 < radius < L/2 = 40 mm"):
+        rounded_corners(40.0, 80.0)
 
 
 def test_the_process_zone_grows_with_dc_and_shrinks_with_the_friction_drop():

@@ -17,6 +17,8 @@ process zone: :meth:`slipwave.setup.TestSetup.process_zone`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -160,7 +162,9 @@ def feature_summary(features: SlipFeatures) -> dict[str, float]:
 def simulated_summary(setup: TestSetup, friction: Coulomb, elements: int, *,
                       min_drop: float, sample_rate: float,
                       detection: DetectionSettings = DEFAULT_DETECTION,
-                      cache: SolverCache | None = None) -> dict[str, float]:
+                      cache: SolverCache | None = None,
+                      profile: Callable[[np.ndarray], np.ndarray] | None = None,
+                      ) -> dict[str, float]:
     """The test simulated at one mesh, its features read as the fit reads them.
 
     Parameters
@@ -179,6 +183,9 @@ def simulated_summary(setup: TestSetup, friction: Coulomb, elements: int, *,
         The detection's settings.
     cache
         The solver's cache.
+    profile
+        The slab's initial gap (e.g. :func:`slipwave.solver.slab.rounded_corners`);
+        ``None``: flat, sharp corners.
 
     Returns
     -------
@@ -186,7 +193,7 @@ def simulated_summary(setup: TestSetup, friction: Coulomb, elements: int, *,
         :func:`feature_summary` and ``first_slip_place``.
 
     """
-    simulation = setup.simulate(friction, elements, cache=cache)
+    simulation = setup.simulate(friction, elements, cache=cache, profile=profile)
     events = simulated_events(simulation, setup, min_drop=min_drop, sample_rate=sample_rate,
                               detection=detection)
     threshold = edge_threshold(simulation, edge_reference=setup.edge_reference)

@@ -12,7 +12,8 @@ to add to the campaign table.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -117,7 +118,8 @@ class TestSetup:
             raise SlipwaveError(f"test {self.test_id!r}: {err}") from err
 
     def simulate(self, friction: Coulomb, elements: int, *,
-                 cache: SolverCache | None = None) -> xr.Dataset:
+                 cache: SolverCache | None = None,
+                 profile: Callable[[np.ndarray], np.ndarray] | None = None) -> xr.Dataset:
         """The test simulated: its slab and load path with ``friction``.
 
         Parameters
@@ -128,6 +130,9 @@ class TestSetup:
             Elements along the contact.
         cache
             The solver's cache (:func:`slipwave.solver.simulate`).
+        profile
+            The slab's initial gap (``Slab.profile``, e.g.
+            :func:`slipwave.solver.slab.rounded_corners`); ``None``: flat.
 
         Returns
         -------
@@ -141,7 +146,8 @@ class TestSetup:
 
         """
         try:
-            return simulate(self.slab(elements), friction, self.load_path(), cache=cache)
+            slab = dataclasses.replace(self.slab(elements), profile=profile)
+            return simulate(slab, friction, self.load_path(), cache=cache)
         except SolverError as err:
             settings = ", ".join(f"{key} {self[key]:.4g} ({self.settings[key].source})"
                                  for key in ("youngs_modulus_mpa", "normal_load_n",

@@ -220,6 +220,43 @@ class CondensationStore(Protocol):
         """
 
 
+def rounded_corners(radius: float, length: float = CONTACT_LENGTH_MM
+                    ) -> Callable[[np.ndarray], np.ndarray]:
+    """A slab's profile whose two contact corners are rounded (``Slab(profile=)``).
+
+    Over the last ``radius`` of each end of the contact the slab's face lifts off the
+    flat along a quarter circle of that radius, which bounds the stress concentration
+    a sharp corner has.
+
+    Parameters
+    ----------
+    radius
+        The corners' radius, mm.
+    length
+        The contact's length L, mm.
+
+    Returns
+    -------
+    callable
+        x (mm, 0 at the contact's centre) -> the initial gap, mm; picklable.
+
+    Examples
+    --------
+    >>> gap = rounded_corners(2.0)(np.array([0.0, 38.0, 39.0, 40.0]))
+    >>> gap.round(3).tolist()
+    [0.0, 0.0, 0.268, 2.0]
+    """
+    if not 0.0 < radius < length / 2:
+        raise SlipwaveError(f"corner radius {radius} mm: need 0 < radius < L/2 = "
+                            f"{length / 2:g} mm")
+    return functools.partial(_rounded_gap, radius=radius, start=length / 2 - radius)
+
+
+def _rounded_gap(x: np.ndarray, *, radius: float, start: float) -> np.ndarray:
+    beyond = np.clip(np.abs(x) - start, 0.0, radius)
+    return radius - np.sqrt(radius**2 - beyond**2)
+
+
 def geometry_key(slab: Slab) -> str:
     """A key naming the slab's geometry and mesh (not E, width, profile or friction).
 
