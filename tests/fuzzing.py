@@ -88,16 +88,18 @@ def valid_fit(**changes: object) -> dict:
     law = {"law": "coulomb",
            "parameters": {"fs": {"value": 0.8, "low": 0.75, "high": 0.85, "units": "1"},
                           "fd": {"value": 0.6, "low": 0.55, "high": 0.65, "units": "1"}},
-           "misfit": 12.5, "features": 14, "aic": 16.5, "evaluations": 20,
-           "interval_method": "curvature", "edge_threshold": 0.9,
-           "misfit_nearby": [13.0, None], "delta_aic": 0.0, "rejected": False}
+           "log_evidence": -12.5, "log_bayes_factor": 0.0, "rejected": False,
+           "guesses": 20, "simulations": 80}
     fit = {"test_id": "small", "recording_sha256": "0" * 64, "setup": SETUP, "elements": 16,
            "detection": {"threshold": 8.0, "max_spike": 2, "max_duration": None,
                          "min_fall_rate": 1.2, "edge_convention": "auto"},
            "load_calibration": 0.02,
            "measured": {"slips": 3, "gross_slips": 2, "min_drop_n": 0.3},
-           "edge_threshold": 0.9, "laws": {"coulomb": law}, "chosen": "coulomb",
-           "parameters": {"fs": 0.8, "fd": 0.6}}
+           "edge_threshold": 0.9, "features": {"first_ratio": 0.55},
+           "laws": {"coulomb": law}, "chosen": "coulomb",
+           "parameters": {"fs": 0.8, "fd": 0.6}, "settings": {"members": 4},
+           "predictive": {"first_ratio": {"measured": 0.55, "simulated": 0.56, "spread": 0.01,
+                                          "z": -1.0, "agrees": True}}}
     fit.update(changes)
     return copy.deepcopy(fit)
 

@@ -24,7 +24,7 @@ from slipwave.bench.generate import BenchTest, simulate_test
 from slipwave.campaign_report import campaign_summary, write_campaign_report
 from slipwave.compare import compare_test
 from slipwave.events import detect_events, events_dataset, segment_phases
-from slipwave.fit import chosen_law, fit_test, measured_events
+from slipwave.fit import FitSettings, chosen_law, fit_test, measured_events
 from slipwave.fits import fits_table
 from slipwave.report import (
     pairing_summary,
@@ -93,8 +93,10 @@ def built(tmp_path_factory):
     recording = result.recording
     setup = read_test_setup(recording, {"test_id": "v", "youngs_modulus_mpa": "7",
                                         "poisson_ratio": "0.48", "edge_reference": "frame"})
-    fit = fit_test(setup, measured_events(recording), laws=["coulomb"], elements=24,
-                   max_evaluations=3)
+    fit = fit_test(setup, measured_events(recording), FitSettings.from_values(
+        {"elements": 24, "members": 2, "stages": 1, "design": 2, "acquisitions": 1,
+         "refinements": 0, "samples": 300, "predictive_members": 3, "mesh_check": True}),
+        laws=["coulomb"])
     replay = replay_test(setup, chosen_law(fit), min_drop=0.3, elements=24)
     table = detect_events(recording, gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
     events = events_dataset(table, segment_phases(recording, table))
@@ -143,7 +145,12 @@ def test_full_report_says_what_it_compares(built):
     assert f"DG/DD jump ratio of {detection:.3g} or more, read off the simulated slips" in html
     assert f"the fit judged its laws' features by {fitted:.3g}" in html
     # the chosen law at twice the mesh, each parameter's change, and what Coulomb's is
-    assert "The chosen law refitted at 48 elements, twice the fit's 24" in html
+    assert "The chosen law searched again at 48 elements, twice the fit's 24" in html
+    # the chosen law's posterior predictive, feature by feature, and what it says
+    assert "The chosen law against the measurement." in html
+    assert html.count('<span class="agrees">agrees</span>') + html.count(
+        '<span class="differs">differs</span>') >= 13
+    assert ("reproduces every feature" in html) != ("does not reproduce this recording" in html)
     assert "has no length scale: its coefficients are the mesh-dependent limit" in html
     campaign = pages["campaign"].read_text()
     assert "fs, fd at twice the mesh" in campaign and campaign.count(" %, ") >= 1

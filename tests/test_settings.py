@@ -40,7 +40,8 @@ REACHES = [
     ("video", "band_mm", [0.5, 3.0], {"kymograph", "simulate"}),
     ("fit", "laws", ["coulomb"], {"fit"}),
     ("fit", "elements", 60, {"fit"}),
-    ("fit", "max_evaluations", 5, {"fit"}),
+    ("fit", "members", 5, {"fit"}),
+    ("fit", "stages", 2, {"fit"}),
     ("fit", "load_calibration", 0.01, {"fit"}),
     ("fit", "mesh_check", False, {"fit"}),
     # the rows' paths name their mesh: the assembly's command changes with it

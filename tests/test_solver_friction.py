@@ -81,8 +81,12 @@ def test_the_virtual_bench_writes_a_slip_weakening_test():
     assert result.simulation.attrs["friction_law"] == "linear slip-weakening"
 
 
-def test_a_run_in_lasts_a_whole_number_of_gross_slips():
+def test_a_run_in_goes_its_share_of_the_way_per_gross_slip():
     assert Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=4.0).static_after(2) == \
         pytest.approx(1.05)
-    with pytest.raises(SlipwaveError, match=r"whole number of gross slips, not 4\.5"):
-        Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=4.5)
+    # not whole: 2 slips of 2.5 are 80 % of the way; a falling run-in as well
+    assert Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=2.5).static_after(2) == \
+        pytest.approx(0.9 + 0.8 * 0.3)
+    assert Coulomb(fs=0.9, fd=0.6, fs_final=0.7, runin_slips=2.5).static_after(5) == 0.7
+    with pytest.raises(SlipwaveError, match="runin_slips > 0"):
+        Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=0)

@@ -194,7 +194,7 @@ def _setting_pair(text: str) -> tuple[str, str]:
 def _fit(args: argparse.Namespace) -> None:
     import json
 
-    from slipwave.fit import fit_test, measured_events
+    from slipwave.fit import FitSettings, fit_test, measured_events
     from slipwave.identity import stamp
     from slipwave.io import atomic_output, read_dataset
     from slipwave.resources import require_memory
@@ -211,10 +211,9 @@ def _fit(args: argparse.Namespace) -> None:
                    f"fitting test {setup.test_id!r} with {args.elements} elements"
                    + (f" (checked at {finest})" if check_mesh else ""),
                    limit_gb=args.memory_limit)
-    fit = fit_test(setup, events, laws=args.laws, elements=args.elements,
-                   max_evaluations=args.max_evaluations,
-                   calibration_error=args.load_calibration, detection=detection,
-                   cache=_solver_cache(args), check_mesh=check_mesh)
+    settings = FitSettings.from_values({**vars(args), "mesh_check": check_mesh})
+    fit = fit_test(setup, events, settings, laws=args.laws, detection=detection,
+                   cache=_solver_cache(args))
     stamp(fit, None, recording.attrs)
     seconds = {law: entry.pop("seconds") for law, entry in fit["laws"].items()}
     finer = fit["mesh_check"]
@@ -225,13 +224,17 @@ def _fit(args: argparse.Namespace) -> None:
     for law, entry in fit["laws"].items():
         values = ", ".join(f"{name} {p['value']:.4g} [{p['low']:.4g}, {p['high']:.4g}]"
                            for name, p in entry["parameters"].items())
-        print(f"{law}: {values}; misfit {entry['misfit']:.1f} over {entry['features']} "
-              f"features, AIC {entry['aic']:.1f}{' (rejected)' if entry['rejected'] else ''}, "
-              f"{entry['evaluations']} simulations in {seconds[law]:.0f} s")
+        print(f"{law}: {values}; log evidence {entry['log_evidence']:.1f} (Bayes factor "
+              f"e^{entry['log_bayes_factor']:.1f}){' (rejected)' if entry['rejected'] else ''}, "
+              f"{entry['guesses']} guesses, {entry['simulations']} simulations in "
+              f"{seconds[law]:.0f} s")
+    differs = [name for name, check in fit["predictive"].items() if not check["agrees"]]
+    print(f"{fit['chosen']} chosen; its posterior predictive "
+          + (f"differs on {', '.join(differs)}" if differs else "agrees on every feature"))
     if finer is not None:
         changes = ", ".join(f"{name} {change:+.2%}" for name, change in finer["change"].items())
-        print(f"{finer['law']} refitted at {finer['elements']} elements: {changes}; "
-              f"{finer['evaluations']} simulations in {seconds['mesh_check']:.0f} s")
+        print(f"{finer['law']} searched at {finer['elements']} elements: {changes}; "
+              f"{finer['simulations']} simulations in {seconds['mesh_check']:.0f} s")
     print(f"{args.recording} -> {args.output}: {fit['chosen']}")
 
 
@@ -968,9 +971,11 @@ def build_parser() -> argparse.ArgumentParser:
                      choices=list(default.FIT_LAWS), help="laws to fit (%(default)s)")
     fit.add_argument("--elements", type=_setting("fit", "elements"), default=default.FIT_ELEMENTS,
                      help="elements along the contact (%(default)s)")
-    fit.add_argument("--max-evaluations", type=_setting("fit", "max_evaluations"),
-                     default=default.FIT_MAX_EVALUATIONS,
-                     help="simulations of each law's local search (%(default)s)")
+    for key in default.FIT_TUNABLES:
+        fit.add_argument(f"--{key.replace('_', '-')}", type=_setting("fit", key),
+                         default=default.FIT_DEFAULTS[key],
+                         help=default.setting_schema("fit", key)["description"].replace(
+                             "%", "%%") + " (%(default)s)")
     fit.add_argument("--load-calibration", type=_setting("fit", "load_calibration"),
                      default=default.LOAD_CALIBRATION,
                      help="relative calibration uncertainty of each load cell (%(default)s)")

@@ -25,19 +25,23 @@ import xarray as xr
 
 from slipwave.compare import recurrence
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings
-from slipwave.fit import (
-    COUNT_SIGMA,
-    PARTIAL_DROP_SIGMA,
-    RATIO_SIGMA,
-    SEQUENCE_SIGMA,
-    TIME_SIGMA_S,
-    SlipFeatures,
-    edge_threshold,
-    simulated_events,
-    slip_features,
-)
+from slipwave.fit import SlipFeatures, edge_threshold, simulated_events, slip_features
 from slipwave.setup import TestSetup
 from slipwave.solver import Coulomb, SolverCache
+
+RATIO_SIGMA = 0.005
+"""A T/|N| at a slip is measured to this (the card's noise over a few samples, the onset's
+sampling)."""
+SEQUENCE_SIGMA = 0.015
+"""T/|N| before slips also moves by this with the cycle a law settles in (which partial
+slips came before): one slip more or fewer moves a median by about as much."""
+TIME_SIGMA_S = 1.0
+"""A slip's time, s."""
+COUNT_SIGMA = 0.25
+"""A count of slips and the gross slips' recurrence, relative: the cycle's number of slips
+jumps as the coefficients move, several small slips merge in one detected drop."""
+PARTIAL_DROP_SIGMA = 0.2
+"""The median drop of slips, relative (which slips merge into one detected drop)."""
 
 FEATURES: dict[str, str] = {
     "gross_slips": "gross slips (number)",
@@ -55,16 +59,12 @@ FEATURES: dict[str, str] = {
 
 
 def feature_uncertainty(name: str, value: float) -> float:
-    """The uncertainty the fit gives a feature of this value (its residual's scale).
+    """The uncertainty a mesh study gives a feature of this value (what counts as a change).
 
-    T/|N| after gross slips: :data:`~slipwave.fit.RATIO_SIGMA`; before them and before
-    the first slip, with the cycle's :data:`~slipwave.fit.SEQUENCE_SIGMA` in quadrature
-    (the fit's offset common to the gross slips, and the first slip's own scatter: one
-    slip more or fewer in the cycle moves their median by about as much); counts:
-    :data:`~slipwave.fit.COUNT_SIGMA`
-    of the count, at least 1 gross or 3 partial slips; drops:
-    :data:`~slipwave.fit.PARTIAL_DROP_SIGMA` of the drop; times:
-    :data:`~slipwave.fit.TIME_SIGMA_S`, the recurrence at least ``COUNT_SIGMA`` of
+    T/|N| after gross slips: :data:`RATIO_SIGMA`; before them and before the first slip,
+    with the cycle's :data:`SEQUENCE_SIGMA` in quadrature; counts: :data:`COUNT_SIGMA`
+    of the count, at least 1 gross or 3 partial slips; drops: :data:`PARTIAL_DROP_SIGMA`
+    of the drop; times: :data:`TIME_SIGMA_S`, the recurrence at least ``COUNT_SIGMA`` of
     itself. The first slip's place is not fitted: NaN.
 
     Parameters

@@ -34,8 +34,8 @@ def setting_schema(section: str, key: str) -> dict[str, Any]:
 
     Examples
     --------
-    >>> setting_schema("fit", "max_evaluations")["minimum"]
-    1
+    >>> setting_schema("fit", "members")["minimum"]
+    2
     """
     return dict(_SETTINGS[section]["properties"][key])
 
@@ -123,8 +123,14 @@ FIT_LAWS: tuple[str, ...] = tuple(_setting("fit", "laws"))
 """The laws each test is fitted with."""
 FIT_ELEMENTS: int = _setting("fit", "elements")
 """Elements along the contact in the fit's simulations (and the test's simulation)."""
-FIT_MAX_EVALUATIONS: int = _setting("fit", "max_evaluations")
-"""Simulations of each law's local search, after its starting scan."""
+FIT_TUNABLES: tuple[str, ...] = ("members", "stiffness_error", "speed_error", "step_jitter",
+                                  "ratio_error", "time_error_s", "stages", "design",
+                                  "acquisitions", "refinements", "exploration", "samples",
+                                  "predictive_members", "seed")
+"""The fit's numeric settings besides the mesh and the calibration (the ensemble, the
+measurement's errors, the search), each an option of ``slipwave fit`` of its name."""
+FIT_DEFAULTS: dict[str, Any] = {key: _setting("fit", key) for key in FIT_TUNABLES}
+"""Their defaults."""
 FIT_MESH_CHECK: bool = _setting("fit", "mesh_check")
 """Whether the chosen law is refitted at twice the fit's mesh (its parameters' change)."""
 LOAD_CALIBRATION: float = _setting("fit", "load_calibration")

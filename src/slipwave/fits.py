@@ -1,7 +1,8 @@
 """The fits stage: a campaign's fits in one table, one row per test.
 
 Each test's chosen law with its fs and fd and their 95 % intervals, and every law's
-parameters and AIC difference, from the tests' ``fit.json`` (:func:`slipwave.fit.fit_test`).
+parameters and log Bayes factor against the chosen law, from the tests' ``fit.json``
+(:func:`slipwave.fit.fit_test`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,9 @@ def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
     pandas.DataFrame
         ``test_id``, ``height_ratio``, ``law`` (chosen), ``gross_slips``, each
         parameter of each law as ``<law>_<name>``, ``_low``, ``_high``, each law's
-        ``<law>_delta_aic``, and the chosen law's ``fs``, ``fd`` with their intervals
+        ``<law>_log_bayes_factor``, whether the chosen law's posterior predictive
+        agrees on every feature (``predictive_agrees``), and its ``fs``, ``fd`` with their
+        intervals
         and, when the fit checked its mesh, their relative change at twice it
         (``fs_mesh_change``, ``fd_mesh_change``; empty otherwise).
 
@@ -36,7 +39,9 @@ def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
         row: dict[str, Any] = {
             "test_id": fit["test_id"],
             "height_ratio": setup["height_mm"]["value"] / setup["length_mm"]["value"],
-            "law": fit["chosen"], "gross_slips": fit["measured"]["gross_slips"]}
+            "law": fit["chosen"], "gross_slips": fit["measured"]["gross_slips"],
+            "predictive_agrees": all(check["agrees"]
+                                     for check in fit.get("predictive", {}).values())}
         chosen = fit["laws"][fit["chosen"]]["parameters"]
         finer = fit.get("mesh_check") or {}
         for name in ("fs", "fd"):
@@ -45,7 +50,7 @@ def fits_table(fits: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
             row[f"{name}_mesh_change"] = finer.get("change", {}).get(name)
         for law, entry in fit["laws"].items():
             key = law.replace("-", "_")
-            row[f"{key}_delta_aic"] = entry["delta_aic"]
+            row[f"{key}_log_bayes_factor"] = entry["log_bayes_factor"]
             for name, value in entry["parameters"].items():
                 row[f"{key}_{name}"] = value["value"]
                 row[f"{key}_{name}_low"] = value["low"]

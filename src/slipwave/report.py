@@ -17,6 +17,8 @@ from slipwave import __version__
 from slipwave.compare import SCATTER_STEP
 from slipwave.errors import warning_lines
 from slipwave.events import EVENT_COLUMNS, events_table, wave_counts
+from slipwave.fit.features import FEATURES
+from slipwave.fit.procedure import band_z
 from slipwave.io import CHANNELS, atomic_output
 from slipwave.plot import (
     figure_png,
@@ -281,6 +283,41 @@ def mesh_check_rows(fit: dict[str, Any]) -> dict[str, Any] | None:
             [zone * fit["elements"] / length, zone * finer["elements"] / length]}
 
 
+def predictive_rows(fit: dict[str, Any]) -> dict[str, Any]:
+    """What the page says of the chosen law's posterior predictive, feature by feature.
+
+    Parameters
+    ----------
+    fit
+        ``fit.json`` (:func:`slipwave.fit.fit_test`).
+
+    Returns
+    -------
+    dict
+        ``predictive`` (rows: ``name``, ``meaning``, ``measured``, ``simulated``,
+        ``spread``, ``z``, ``agrees``), ``predictive_differs`` (the features' meanings
+        where it differs), ``predictive_z`` (the band's half-width in standard
+        deviations), ``predictive_members`` and ``members``.
+
+    Examples
+    --------
+    >>> fit = {"predictive": {"first_ratio": {"measured": 0.6, "simulated": 0.61,
+    ...        "spread": 0.01, "z": -1.0, "agrees": True}}}
+    >>> rows = predictive_rows(fit)
+    >>> rows["predictive"][0]["meaning"], rows["predictive_differs"]
+    ('T/|N| before the first slip of any kind', [])
+    """
+    checks = fit.get("predictive") or {}
+    rows = [{"name": name, "meaning": FEATURES.get(name, name), **check}
+            for name, check in checks.items()]
+    settings = fit.get("settings", {})
+    return {"predictive": rows,
+            "predictive_differs": [row["meaning"] for row in rows if not row["agrees"]],
+            "predictive_z": band_z(len(rows)),
+            "predictive_members": settings.get("predictive_members"),
+            "members": settings.get("members")}
+
+
 def pairing_summary(
     recording: xr.Dataset,
     events: xr.Dataset | None,
@@ -363,11 +400,10 @@ def pairing_summary(
                 "law": law, "chosen": law == fit["chosen"], "rejected": entry["rejected"],
                 "parameters": [{"name": name, **value}
                                for name, value in entry["parameters"].items()],
-                "misfit": entry["misfit"], "features": entry["features"],
-                "aic": entry["aic"], "delta_aic": entry["delta_aic"],
-                "evaluations": entry["evaluations"], "method": entry["interval_method"],
-                "nearby": entry.get("misfit_nearby")})
+                "log_bayes_factor": entry["log_bayes_factor"], "guesses": entry["guesses"],
+                "simulations": entry["simulations"]})
         summary["mesh_check"] = mesh_check_rows(fit)
+        summary.update(predictive_rows(fit))
     if comparison is None:
         missing.append("no comparison: the test was not compared with a simulation")
     else:

@@ -119,7 +119,8 @@ class TestSetup:
 
     def simulate(self, friction: Coulomb, elements: int, *,
                  cache: SolverCache | None = None,
-                 profile: Callable[[np.ndarray], np.ndarray] | None = None) -> xr.Dataset:
+                 profile: Callable[[np.ndarray], np.ndarray] | None = None,
+                 travel_step: float = TRAVEL_STEP_MM) -> xr.Dataset:
         """The test simulated: its slab and load path with ``friction``.
 
         Parameters
@@ -133,6 +134,8 @@ class TestSetup:
         profile
             The slab's initial gap (``Slab.profile``, e.g.
             :func:`slipwave.solver.slab.rounded_corners`); ``None``: flat.
+        travel_step
+            The actuator's travel per load step, mm (:meth:`load_path`).
 
         Returns
         -------
@@ -147,7 +150,7 @@ class TestSetup:
         """
         try:
             slab = dataclasses.replace(self.slab(elements), profile=profile)
-            return simulate(slab, friction, self.load_path(), cache=cache)
+            return simulate(slab, friction, self.load_path(travel_step), cache=cache)
         except SolverError as err:
             settings = ", ".join(f"{key} {self[key]:.4g} ({self.settings[key].source})"
                                  for key in ("youngs_modulus_mpa", "normal_load_n",
@@ -213,8 +216,13 @@ class TestSetup:
         return simulation_memory(self.slab(elements), self.load_path(),
                                  samples=self["duration_s"] * sample_rate)
 
-    def load_path(self) -> LoadPath:
+    def load_path(self, travel_step: float = TRAVEL_STEP_MM) -> LoadPath:
         """The test's load path: N held, the flat driven through the machine's spring.
+
+        Parameters
+        ----------
+        travel_step
+            The actuator's travel per load step, mm.
 
         Returns
         -------
@@ -225,7 +233,34 @@ class TestSetup:
         return driven_load_path(normal_load=self["normal_load_n"], speed=self["speed_mm_s"],
                                 duration=self["duration_s"],
                                 loading_time=self["loading_time_s"],
-                                machine_stiffness=self["machine_stiffness_n_mm"])
+                                machine_stiffness=self["machine_stiffness_n_mm"],
+                                travel_step=travel_step)
+
+    def scaled(self, factors: Mapping[str, float], source: str) -> TestSetup:
+        """The setup with some values multiplied, each now from ``source``.
+
+        Parameters
+        ----------
+        factors
+            Setting -> factor (e.g. ``{"normal_load_n": 1.01}``).
+        source
+            Where the new values come from.
+
+        Returns
+        -------
+        TestSetup
+            A copy; the others' values and sources kept.
+
+        Examples
+        --------
+        >>> setup = TestSetup("t", {"normal_load_n": Setting(80.0, "given")}, "frame")
+        >>> setup.scaled({"normal_load_n": 1.5}, "drawn").settings["normal_load_n"]
+        Setting(value=120.0, source='drawn')
+        """
+        settings = dict(self.settings)
+        for key, factor in factors.items():
+            settings[key] = Setting(settings[key].value * factor, source)
+        return dataclasses.replace(self, settings=settings)
 
     @classmethod
     def from_dict(cls, content: Mapping[str, Any]) -> TestSetup:

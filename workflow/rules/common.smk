@@ -121,6 +121,16 @@ def detection_options(wildcards):
     )
 
 
+def fit_options(wildcards):
+    """The fit's ensemble, measurement and search settings, as slipwave fit's options."""
+    return " ".join(
+        f"--{key.replace('_', '-')} {config['fit'][key]}"
+        for key in ("members", "stiffness_error", "speed_error", "step_jitter",
+                    "ratio_error", "time_error_s", "stages", "design", "acquisitions",
+                    "refinements", "exploration", "samples", "predictive_members", "seed")
+    )
+
+
 def pairing_options(wildcards, input):
     names = ("fit", "comparison", "comparison_json", "simulated", "simulated_events",
              "contact", "map")

@@ -16,7 +16,7 @@ rule fit:
         settings=setup_settings,
         laws=" ".join(config["fit"]["laws"]),
         elements=config["fit"]["elements"],
-        max_evaluations=config["fit"]["max_evaluations"],
+        tunables=fit_options,
         load_calibration=config["fit"]["load_calibration"],
         mesh_check="on" if config["fit"]["mesh_check"] else "off",
         detection=detection_options,
@@ -30,7 +30,7 @@ rule fit:
     shell:
         "slipwave fit {input.recording:q} -o {output:q} "
         "--setting {params.settings} --laws {params.laws} --elements {params.elements} "
-        "--max-evaluations {params.max_evaluations} "
+        "{params.tunables} "
         "--load-calibration {params.load_calibration} --mesh-check {params.mesh_check} "
         "{params.detection} {params.cache} "
         "> {log:q} 2>&1"

@@ -12,7 +12,7 @@ truth beside them.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -24,7 +24,7 @@ import xarray as xr
 from tqdm import tqdm
 
 from slipwave.bench.camera import write_image_sequence, write_video
-from slipwave.bench.sensors import DEFAULT_SENSORS, apply_sensors
+from slipwave.bench.sensors import DEFAULT_SENSORS, Sensor, apply_sensors
 from slipwave.defaults import (
     BAND_MM,
     BENCH_ELEMENTS,
@@ -84,7 +84,7 @@ class BenchTest:
     fs: float = 0.9
     fd: float = 0.6
     fs_final: float | None = 1.3
-    runin_slips: int = 4
+    runin_slips: float = 4
     dc: float | None = None
     normal_load: float = 85.0
     speed: float = 0.048
@@ -200,7 +200,8 @@ class BenchResult:
 
 
 def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | None = None,
-                  cache: SolverCache | None = None) -> BenchResult:
+                  cache: SolverCache | None = None,
+                  sensors: Mapping[str, Sensor] | None = None) -> BenchResult:
     """Generate one test in memory: recording, truth and a frame iterator.
 
     Parameters
@@ -215,6 +216,8 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     cache
         The solver's cache (a campaign's tests share their slabs'); ``None``: computed
         afresh.
+    sensors
+        The card's sensors by channel; ``None``: :data:`~slipwave.bench.sensors.DEFAULT_SENSORS`.
 
     Returns
     -------
@@ -239,7 +242,7 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
                           wave_speed=spec.wave_speed)
     if spec.edge_convention == "outward":  # the left sensor reads its edge's outward motion
         clean["DG"] = clean["DG"].copy(data=-clean["DG"].values)
-    recording = apply_sensors(clean, DEFAULT_SENSORS, seed=seed)
+    recording = apply_sensors(clean, dict(sensors or DEFAULT_SENSORS), seed=seed)
     recording.attrs = {
         "test_id": spec.test_id,
         "sample_rate_hz": spec.sample_rate,

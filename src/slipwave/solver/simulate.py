@@ -46,15 +46,17 @@ class Coulomb:
     """Coulomb friction with a static (stick limit) and a dynamic coefficient.
 
     ``fd`` defaults to ``fs``. An optional run-in makes the static coefficient
-    grow linearly from ``fs`` to ``fs_final`` over the first ``runin_slips``
-    gross slips, a whole number (an interface whose adhesion builds up as it is worn
-    in); the dynamic one stays.
+    go linearly from ``fs`` to ``fs_final`` over the first ``runin_slips`` gross
+    slips (an interface whose adhesion builds up as it is worn in, or falls as a
+    surface film is wiped off); the dynamic one stays. ``runin_slips`` need not be
+    whole: after g gross slips the coefficient has gone min(g / runin_slips, 1) of the
+    way, so a fit can move it continuously.
     """
 
     fs: float
     fd: float | None = None
     fs_final: float | None = None
-    runin_slips: int = 0
+    runin_slips: float = 0
 
     def __post_init__(self) -> None:
         if self.fd is None:
@@ -64,9 +66,6 @@ class Coulomb:
         if self.fs_final is not None and not (self.fs_final >= self.dynamic
                                               and self.runin_slips > 0):
             raise SlipwaveError("a run-in needs fs_final >= fd and runin_slips > 0")
-        if float(self.runin_slips) != int(self.runin_slips):
-            raise SlipwaveError(f"a run-in lasts a whole number of gross slips, not "
-                                f"{self.runin_slips}")
 
     def static_after(self, gross_slips: int) -> float:
         """The static coefficient after ``gross_slips`` gross slips.

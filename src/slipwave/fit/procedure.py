@@ -1,0 +1,574 @@
+"""A test's fit: each law's posterior, the law chosen by its evidence, its predictive check.
+
+:func:`fit_test` runs the laws in order (Coulomb first: the richer laws search around
+its posterior), each by :func:`~slipwave.fit.search.search_law` on the test's synthetic
+likelihood (:mod:`slipwave.fit.ensemble`, :mod:`slipwave.fit.likelihood`). The law of
+highest evidence is chosen; its posterior predictive (:func:`predictive_check`) says
+feature by feature whether the measurement lies within the spread of the law's
+simulations, and a local search at twice the mesh (:func:`mesh_check`) how far its
+parameters still follow the mesh.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.stats import norm
+
+from slipwave.defaults import (
+    FIT_DEFAULTS,
+    FIT_ELEMENTS,
+    FIT_MESH_CHECK,
+    FIT_TUNABLES,
+    LOAD_CALIBRATION,
+)
+from slipwave.errors import SlipwaveError
+from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings
+from slipwave.fit.ensemble import Ensemble, Nuisances, draw_members
+from slipwave.fit.features import FEATURES, detected_edge_threshold, measurement_error
+from slipwave.fit.laws import (
+    LAWS,
+    PRIORS,
+    UNITS,
+    ZONE_ELEMENTS,
+    law_of,
+    prior_bounds,
+)
+from slipwave.fit.likelihood import SyntheticLikelihood
+from slipwave.fit.search import Posterior, SearchSettings, search_law
+from slipwave.setup import TestSetup
+from slipwave.solver import Coulomb, SlipWeakening, SolverCache
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """Everything a fit takes besides the test (the configuration's ``fit`` section).
+
+    Attributes
+    ----------
+    elements
+        Elements along the contact.
+    members
+        Simulations per guess (the ensemble).
+    nuisances
+        What the recording does not fix, and how uncertain it is.
+    ratio_error, time_error
+        The measured features' own standard errors (a T/|N|; a time, s).
+    search
+        How far each law's search goes.
+    predictive_members
+        Simulations of the chosen law's posterior predictive.
+    mesh_check
+        Search the chosen law again at twice ``elements``.
+
+    """
+
+    elements: int
+    members: int
+    nuisances: Nuisances
+    ratio_error: float
+    time_error: float
+    search: SearchSettings
+    predictive_members: int
+    mesh_check: bool
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> FitSettings:
+        """The settings from the configuration's ``fit`` keys, defaults for the others.
+
+        Parameters
+        ----------
+        values
+            ``elements``, ``load_calibration``, ``mesh_check`` and any of
+            :data:`~slipwave.defaults.FIT_TUNABLES` (a campaign's ``fit`` section, or a
+            command line's options).
+
+        Returns
+        -------
+        FitSettings
+            The settings.
+
+        Examples
+        --------
+        >>> FitSettings.from_values({"members": 6}).members
+        6
+        """
+        given = {key: values[key] for key in FIT_TUNABLES if key in values}
+        v = {**FIT_DEFAULTS, "elements": FIT_ELEMENTS, "load_calibration": LOAD_CALIBRATION,
+             "mesh_check": FIT_MESH_CHECK, **given,
+             **{key: values[key] for key in ("elements", "load_calibration", "mesh_check")
+                if key in values}}
+        return cls(elements=int(v["elements"]), members=int(v["members"]),
+                   nuisances=Nuisances(float(v["load_calibration"]), float(v["stiffness_error"]),
+                                       float(v["speed_error"]), float(v["step_jitter"])),
+                   ratio_error=float(v["ratio_error"]), time_error=float(v["time_error_s"]),
+                   search=SearchSettings(int(v["stages"]), int(v["design"]),
+                                         int(v["acquisitions"]), int(v["refinements"]),
+                                         float(v["exploration"]), int(v["samples"]),
+                                         int(v["seed"])),
+                   predictive_members=int(v["predictive_members"]),
+                   mesh_check=bool(v["mesh_check"]))
+
+
+FD_WINDOW = 0.1
+"""Half-width of Coulomb's first search box in fd about T/|N| after the largest drops:
+a gross slip overshoots fd by a few hundredths at most (the slab's inertia-free
+unloading, a sampled trough), never by a tenth."""
+SEARCH_MARGIN = {"fs": (0.15, 0.25), "fd": (0.02, 0.02), "fs_final": (0.4, 0.4)}
+"""How far the richer laws' first box reaches beyond Coulomb's 95 % interval (below,
+above): a slip-weakening law's fs reads higher than Coulomb's (a slip that weakens over
+Dc sheds its load later: 4-32 % in four tests), a run-in's first and final fs lie either
+side of it."""
+FAMILY_LEVEL = 0.95
+"""The predictive check's level over all features at once: each feature's band is
+Bonferroni's, z of 1 - (1 - level) / (2 features)."""
+
+
+def band_z(features: int) -> float:
+    """The predictive band's half-width, in standard deviations, for so many features.
+
+    Parameters
+    ----------
+    features
+        How many features are checked at once.
+
+    Returns
+    -------
+    float
+        z of 1 - (1 - :data:`FAMILY_LEVEL`) / (2 features) (Bonferroni).
+
+    Examples
+    --------
+    >>> round(band_z(13), 2)
+    2.89
+    """
+    return float(norm.ppf(1.0 - (1.0 - FAMILY_LEVEL) / (2 * max(1, features))))
+
+
+def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *, elements: int,
+                    detection: DetectionSettings = DEFAULT_DETECTION,
+                    cache: SolverCache | None = None) -> float:
+    """The test's edge threshold from one Coulomb run at plausible coefficients.
+
+    What separates a gross slip's edge jumps from a partial slip's is the slab's shape
+    (how the far edge follows); one simulation at fd from the largest drops and fs 0.3
+    above sets it for the whole fit.
+
+    Parameters
+    ----------
+    setup, measured, elements, detection, cache
+        As in :func:`fit_test`.
+
+    Returns
+    -------
+    float
+        :func:`~slipwave.fit.features.detected_edge_threshold` of that run.
+
+    """
+    fd = fd_start(measured)
+    simulation = setup.simulate(Coulomb(fs=fd + 0.3, fd=fd), elements, cache=cache)
+    return detected_edge_threshold(simulation, setup,
+                                   min_drop=float(measured.attrs.get("min_drop", 0.0)),
+                                   sample_rate=float(measured.attrs["sample_rate"]),
+                                   detection=detection)
+
+
+def fd_start(measured: pd.DataFrame) -> float:
+    """T/|N| after the largest quarter of the drops, within fd's prior.
+
+    Parameters
+    ----------
+    measured
+        The test's events.
+
+    Returns
+    -------
+    float
+        Where Coulomb's search centres fd.
+
+    """
+    largest = measured["drop"] >= measured["drop"].quantile(0.75)
+    return float(np.clip(measured.loc[largest, "ratio_after"].median(), PRIORS["fd"].low,
+                         PRIORS["fd"].high))
+
+
+def dc_per_excess(setup: TestSetup, elements: int) -> float:
+    """The shortest Dc the mesh resolves, per unit of fs - fd.
+
+    A slip-weakening law's process zone, G* Dc / ((fs - fd) sigma), must span
+    :data:`~slipwave.fit.laws.ZONE_ELEMENTS` elements: Dc at least this times fs - fd.
+
+    Parameters
+    ----------
+    setup
+        The test's setup.
+    elements
+        The mesh.
+
+    Returns
+    -------
+    float
+        mm per unit of fs - fd.
+
+    """
+    spacing = setup["length_mm"] / elements
+    zone = setup.process_zone(SlipWeakening(fs=1.0, fd=0.0, dc=1.0))  # Dc 1 mm, excess 1
+    return ZONE_ELEMENTS * spacing / zone
+
+
+def first_box(law: str, measured: pd.DataFrame, coulomb: Posterior | None) -> np.ndarray:
+    """Where a law's search starts, in its prior's coordinates.
+
+    Coulomb: fd within :data:`FD_WINDOW` of T/|N| after the largest drops, fs over its
+    prior. The others: around Coulomb's posterior (:data:`SEARCH_MARGIN`), their own
+    parameters over their priors; without Coulomb's, as Coulomb's.
+
+    Parameters
+    ----------
+    law
+        One of :data:`~slipwave.fit.laws.LAWS`.
+    measured
+        The test's events.
+    coulomb
+        Coulomb's posterior, if fitted.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (parameters, 2).
+
+    """
+    box = prior_bounds(law)
+    names = LAWS[law]
+    fd = fd_start(measured)
+    box[names.index("fd")] = (fd - FD_WINDOW, fd + FD_WINDOW)
+    if coulomb is None:
+        return box
+    summary = coulomb.summary()
+    for name in ("fs", "fd"):
+        below, above = SEARCH_MARGIN[name]
+        box[names.index(name)] = (summary[name]["low"] - below, summary[name]["high"] + above)
+    if "fs_final" in names:
+        below, above = SEARCH_MARGIN["fs_final"]
+        box[names.index("fs_final")] = (summary["fs"]["low"] - below,
+                                        summary["fs"]["high"] + above)
+    return box
+
+
+def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, seed: int,
+                     error: np.ndarray) -> dict[str, dict[str, Any]]:
+    """The chosen law's posterior predictive against the measured features.
+
+    ``members`` simulations, each with parameters drawn from the posterior and its own
+    nuisances (:func:`~slipwave.fit.ensemble.draw_members`); a feature agrees when the
+    measurement lies within z standard deviations of their mean, the spread of the
+    simulations and the measurement's own error in quadrature, z Bonferroni's for
+    :data:`FAMILY_LEVEL` over all the features: a law that is right then agrees on every
+    feature in 95 % of tests.
+
+    Parameters
+    ----------
+    ensemble
+        The test's ensemble (its setup, measurement and settings).
+    posterior
+        The chosen law's.
+    members
+        Simulations.
+    seed
+        The draws' seed.
+    error
+        The measured features' standard errors.
+
+    Returns
+    -------
+    dict
+        Feature -> ``measured``, ``simulated`` (the mean), ``spread`` (the standard
+        deviation with the measurement's error), ``z`` and ``agrees``.
+
+    """
+    rng = np.random.default_rng(seed)
+    draws = posterior.samples[rng.choice(posterior.samples.shape[0], size=members)]
+    rows = []
+    for member, params in zip(draw_members(ensemble.nuisances, members, seed + 1), draws,
+                              strict=True):
+        law_params = dict(zip(LAWS[posterior.law], (float(v) for v in params), strict=True))
+        try:
+            rows.append(ensemble.member_vector(posterior.law, law_params, member))
+        except SlipwaveError:
+            continue
+    simulated = np.array(rows)
+    z = band_z(len(FEATURES))
+    mean = simulated.mean(axis=0)
+    spread = np.hypot(simulated.std(axis=0, ddof=1), error)
+    return {name: {"measured": round(float(ensemble.observed[k]), 6),
+                   "simulated": round(float(mean[k]), 6),
+                   "spread": round(float(spread[k]), 6),
+                   "z": round(float((ensemble.observed[k] - mean[k]) / spread[k]), 3),
+                   "agrees": bool(abs(ensemble.observed[k] - mean[k]) <= z * spread[k])}
+            for k, name in enumerate(FEATURES)}
+
+
+def law_entry(posterior: Posterior, best_evidence: float, simulations: int,
+              decisive: float) -> dict[str, Any]:
+    """A law's posterior in plain types (``fit.json``'s ``laws``).
+
+    Parameters
+    ----------
+    posterior
+        The law's.
+    best_evidence
+        The chosen law's log evidence.
+    simulations
+        Simulations its search ran.
+    decisive
+        The log Bayes factor beyond which a law is rejected.
+
+    Returns
+    -------
+    dict
+        ``law``, ``parameters`` (value: posterior median, low and high: its central
+        95 % interval, units), ``log_evidence``, ``log_bayes_factor`` (this law's
+        against the chosen one, <= 0), ``rejected``, ``guesses``, ``simulations``,
+        ``seconds``.
+
+    """
+    summary = posterior.summary()
+    factor = posterior.log_evidence - best_evidence
+    return {"law": posterior.law,
+            "parameters": {name: {key: round(value, 6) for key, value in entry.items()}
+                           | {"units": UNITS[name]} for name, entry in summary.items()},
+            "log_evidence": round(posterior.log_evidence, 3),
+            "log_bayes_factor": round(factor, 3),
+            "rejected": bool(-factor > decisive),
+            "guesses": int(posterior.points.shape[0]),
+            "simulations": simulations,
+            "seconds": round(posterior.seconds, 2)}
+
+
+DECISIVE = float(np.log(100.0))
+"""A law whose evidence is below the chosen one's by a factor of 100 or more is rejected
+(Jeffreys' "decisive")."""
+
+
+@dataclass
+class TestFit:
+    """Every law's posterior on a test, and what they were computed with.
+
+    Attributes
+    ----------
+    posteriors
+        By law, in :data:`~slipwave.fit.laws.LAWS`' order.
+    simulations
+        Simulations each law's search ran.
+    ensemble
+        The test's ensemble (its measured features, members and settings).
+    error
+        The measured features' standard errors.
+    threshold
+        The test's edge threshold.
+
+    """
+
+    __test__ = False  # not a pytest class
+
+    posteriors: dict[str, Posterior]
+    simulations: dict[str, int]
+    ensemble: Ensemble
+    error: np.ndarray
+    threshold: float
+
+    @property
+    def chosen(self) -> Posterior:
+        """The law of highest evidence.
+
+        Returns
+        -------
+        Posterior
+            Its posterior.
+
+        """
+        return max(self.posteriors.values(), key=lambda posterior: posterior.log_evidence)
+
+
+def fit_laws(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
+             laws: Sequence[str] = tuple(LAWS),
+             detection: DetectionSettings = DEFAULT_DETECTION,
+             cache: SolverCache | None = None) -> TestFit:
+    """Every law's posterior on a test (Coulomb first: the others search around it).
+
+    Parameters
+    ----------
+    setup, measured, settings, laws, detection, cache
+        As in :func:`fit_test`.
+
+    Returns
+    -------
+    TestFit
+        The posteriors.
+
+    Raises
+    ------
+    SlipwaveError
+        For an unknown law, or a law the solver follows nowhere.
+
+    """
+    unknown = [law for law in laws if law not in LAWS]
+    if unknown:
+        raise SlipwaveError(f"unknown friction law(s) {unknown}; known: {', '.join(LAWS)}")
+    cache = cache or SolverCache()
+    threshold = probe_threshold(setup, measured, elements=settings.elements,
+                                detection=detection, cache=cache)
+    members = draw_members(settings.nuisances, settings.members, settings.search.seed)
+    ensemble = Ensemble(setup, measured, members, threshold=threshold,
+                        elements=settings.elements, detection=detection, cache=cache,
+                        nuisances=settings.nuisances)
+    error = measurement_error(ensemble.measured, ratio_error=settings.ratio_error,
+                              time_error=settings.time_error)
+    likelihood = SyntheticLikelihood(ensemble.observed, error)
+    posteriors: dict[str, Posterior] = {}
+    simulations: dict[str, int] = {}
+    for law in sorted(laws, key=list(LAWS).index):
+        before = ensemble.simulations
+        box = first_box(law, measured, posteriors.get("coulomb"))
+        posteriors[law] = search_law(law, partial(ensemble.features, law),
+                                     likelihood, box, settings.search,
+                                     dc_per_excess=dc_per_excess(setup, settings.elements))
+        simulations[law] = ensemble.simulations - before
+    return TestFit(posteriors, simulations, ensemble, error, threshold)
+
+
+def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
+             laws: Sequence[str] = tuple(LAWS),
+             detection: DetectionSettings = DEFAULT_DETECTION,
+             cache: SolverCache | None = None) -> dict[str, Any]:
+    """Fit every law to a test, choose by evidence, check the chosen law's predictive.
+
+    Parameters
+    ----------
+    setup
+        The test's configuration (:func:`slipwave.setup.read_test_setup`).
+    measured
+        Its events (:func:`~slipwave.fit.features.measured_events`).
+    settings
+        The fit's settings.
+    laws
+        The laws to fit (Coulomb first when fitted: the others start around it).
+    detection
+        The detection's settings (the measurement's).
+    cache
+        The solver's cache, shared by every simulation.
+
+    Returns
+    -------
+    dict
+        ``fit.json``'s content: ``test_id``, ``setup`` (every value with its source),
+        ``elements``, ``detection``, ``load_calibration``, ``measured`` (slip counts),
+        ``edge_threshold``, ``features`` (the measured ones), ``laws`` (each
+        :func:`law_entry`), ``chosen`` (the highest evidence), ``parameters`` (its
+        posterior medians), ``settings`` (the ensemble's and the search's),
+        ``predictive`` (:func:`predictive_check`) and
+        ``mesh_check`` (:func:`mesh_check`, or null).
+
+    Raises
+    ------
+    SlipwaveError
+        For an unknown law, or a law the solver follows nowhere.
+
+    """
+    cache = cache or SolverCache()
+    fitted = fit_laws(setup, measured, settings, laws=laws, detection=detection, cache=cache)
+    chosen = fitted.chosen
+    ensemble = fitted.ensemble
+    predictive = predictive_check(ensemble, chosen, settings.predictive_members,
+                                  settings.search.seed, fitted.error)
+    finer = (mesh_check(setup, measured, chosen, settings, threshold=fitted.threshold,
+                        detection=detection, cache=cache) if settings.mesh_check else None)
+    summary = chosen.summary()
+    return {"test_id": setup.test_id, "setup": setup.to_dict(),
+            "elements": settings.elements, "detection": detection.to_dict(),
+            "load_calibration": settings.nuisances.load_calibration,
+            "measured": {"slips": len(measured),
+                         "gross_slips": len(ensemble.measured.gross),
+                         "min_drop_n": round(float(measured.attrs.get("min_drop", 0.0)), 6)},
+            "edge_threshold": round(fitted.threshold, 4),
+            "features": {name: round(float(value), 6)
+                         for name, value in zip(FEATURES, ensemble.observed, strict=True)},
+            "laws": {law: law_entry(posterior, chosen.log_evidence, fitted.simulations[law],
+                                    DECISIVE)
+                     for law, posterior in fitted.posteriors.items()},
+            "chosen": chosen.law,
+            "parameters": {name: round(entry["value"], 6) for name, entry in summary.items()},
+            "settings": {"members": settings.members,
+                         "predictive_members": settings.predictive_members,
+                         "stiffness_error": settings.nuisances.stiffness_error,
+                         "speed_error": settings.nuisances.speed_error,
+                         "step_jitter": settings.nuisances.step_jitter,
+                         "ratio_error": settings.ratio_error,
+                         "time_error_s": settings.time_error,
+                         **{key: getattr(settings.search, key) for key in (
+                             "stages", "design", "acquisitions", "refinements",
+                             "exploration", "samples", "seed")}},
+            "predictive": predictive,
+            "mesh_check": finer}
+
+
+def mesh_check(setup: TestSetup, measured: pd.DataFrame, posterior: Posterior,
+               settings: FitSettings, *, threshold: float,
+               detection: DetectionSettings = DEFAULT_DETECTION,
+               cache: SolverCache | None = None) -> dict[str, Any]:
+    """The chosen law searched again at twice the mesh, within its posterior's box.
+
+    One stage of the search (:func:`~slipwave.fit.search.search_law`) over the box the
+    posterior ended in, the same measured features (the fit's edge threshold), the
+    same members. A law with a length scale (slip-weakening's Dc) converges once its
+    process zone spans a few elements; Coulomb's law with fs > fd and run-in have none,
+    and their coefficients are the mesh-dependent limit (docs: "Mesh convergence").
+
+    Parameters
+    ----------
+    setup, measured, settings, detection, cache
+        As in :func:`fit_test`.
+    posterior
+        The chosen law's, on the fit's mesh.
+    threshold
+        The fit's edge threshold.
+
+    Returns
+    -------
+    dict
+        ``elements``, ``law``, ``parameters`` (median and 95 % interval at
+        ``elements``), ``change`` (each parameter's relative change of median),
+        ``simulations``, ``seconds`` and ``process_zone_mm`` (the law's process zone at
+        the posterior median; null for a law without a length).
+
+    """
+    elements = 2 * settings.elements
+    members = draw_members(settings.nuisances, settings.members, settings.search.seed)
+    ensemble = Ensemble(setup, measured, members, threshold=threshold, elements=elements,
+                        detection=detection, cache=cache, nuisances=settings.nuisances)
+    error = measurement_error(ensemble.measured, ratio_error=settings.ratio_error,
+                              time_error=settings.time_error)
+    local = SearchSettings(stages=1, design=settings.search.design,
+                           acquisitions=settings.search.acquisitions, refinements=0,
+                           exploration=settings.search.exploration,
+                           samples=settings.search.samples, seed=settings.search.seed)
+    law = posterior.law
+    values = {name: entry["value"] for name, entry in posterior.summary().items()}
+    finer = search_law(law, partial(ensemble.features, law),
+                       SyntheticLikelihood(ensemble.observed, error), posterior.box, local,
+                       dc_per_excess=dc_per_excess(setup, elements))
+    summary = finer.summary()
+    zone = setup.process_zone(law_of(law, values))
+    return {"elements": elements, "law": law,
+            "parameters": {name: {key: round(value, 6) for key, value in entry.items()}
+                           | {"units": UNITS[name]} for name, entry in summary.items()},
+            "change": {name: round((summary[name]["value"] - value) / value, 6)
+                       for name, value in values.items()},
+            "simulations": ensemble.simulations, "seconds": round(finer.seconds, 2),
+            "process_zone_mm": round(zone, 4) if zone > 0 else None}
+

@@ -1,0 +1,517 @@
+"""The posterior of a law's parameters, from a surrogate of its synthetic likelihood.
+
+Each synthetic log-likelihood costs an ensemble of simulations
+(:mod:`slipwave.fit.ensemble`), so an MCMC cannot call it the thousands of times it
+needs. The search is Bayesian optimisation of a Gaussian-process surrogate, as BOLFI
+does (Gutmann and Corander 2016, JMLR 17:125): the log-likelihood is evaluated at a
+Latin hypercube over the law's search box (scipy's :mod:`scipy.stats.qmc`), a Gaussian
+process is fitted to it (scikit-learn's, with a white-noise term for the ensemble's own
+scatter), and more points are added where its upper confidence bound is highest, then
+where its posterior has mass. The posterior is the prior times the exponential of the
+surrogate's mean, sampled by emcee's affine-invariant ensemble sampler (Foreman-Mackey
+et al. 2013); a law's evidence is that posterior's normalising constant, estimated by
+importance sampling, and the laws are compared by it (Bayes factors: each law's prior
+volume is what penalises its extra parameters). ELFI's BOLFI itself is not used: its
+Gaussian processes come from GPy, which does not install with numpy 2.
+"""
+
+from __future__ import annotations
+
+import time as clock
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import emcee
+import numpy as np
+from scipy.special import logsumexp
+from scipy.stats import multivariate_normal, qmc
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+from slipwave.errors import SlipwaveError
+from slipwave.fit.laws import LAWS, from_coordinates, prior_bounds, prior_mask
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """How far the search goes (the fit section of the configuration).
+
+    Attributes
+    ----------
+    stages
+        Zooming stages at most (:func:`search_law`).
+    design
+        Points of each stage's Latin hypercube, per parameter.
+    acquisitions
+        Points added in each stage where the surrogate's upper confidence bound is
+        highest, per parameter.
+    refinements
+        Points added from the surrogate's posterior, per parameter.
+    exploration
+        The upper confidence bound's multiple of the surrogate's standard deviation.
+    samples
+        Posterior samples kept.
+    seed
+        The search's random seed.
+
+    """
+
+    stages: int
+    design: int
+    acquisitions: int
+    refinements: int
+    exploration: float
+    samples: int
+    seed: int
+
+
+@dataclass
+class Posterior:
+    """A law's posterior on a test.
+
+    Attributes
+    ----------
+    law
+        Its name (:data:`~slipwave.fit.laws.LAWS`).
+    samples
+        Posterior samples, shape (samples, parameters), in the parameters' own units.
+    log_evidence
+        The log of the law's marginal likelihood (up to the same constant for every
+        law of a test).
+    points, logliks
+        Where the synthetic log-likelihood was evaluated (the search's coordinates) and
+        its values.
+    box
+        The search box, shape (parameters, 2), in the search's coordinates.
+    seconds
+        Time the search took.
+
+    """
+
+    law: str
+    samples: np.ndarray
+    log_evidence: float
+    points: np.ndarray
+    logliks: np.ndarray
+    box: np.ndarray
+    seconds: float = 0.0
+    surrogate: Surrogate | None = field(default=None, repr=False)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The law's parameters.
+
+        Returns
+        -------
+        tuple of str
+            In :data:`~slipwave.fit.laws.LAWS`' order.
+
+        """
+        return LAWS[self.law]
+
+    def summary(self) -> dict[str, dict[str, float]]:
+        """Each parameter's posterior median and central 95 % interval.
+
+        Returns
+        -------
+        dict
+            Name -> ``value``, ``low``, ``high``.
+
+        """
+        low, median, high = np.quantile(self.samples, [0.025, 0.5, 0.975], axis=0)
+        return {name: {"value": float(m), "low": float(a), "high": float(b)}
+                for name, a, m, b in zip(self.names, low, median, high, strict=True)}
+
+
+def _inside(law: str, box: np.ndarray, dc_per_excess: float
+            ) -> Callable[[np.ndarray], np.ndarray]:
+    """Which points (rows) lie in the box and the prior's support."""
+    def inside(x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(x)
+        return (np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
+                & prior_mask(law, x, dc_per_excess=dc_per_excess))
+    return inside
+
+
+def _fill(law: str, box: np.ndarray, count: int, rng: np.random.Generator,
+          inside: Callable[[np.ndarray], np.ndarray], *, latin: bool) -> np.ndarray:
+    """``count`` points of the box within the prior: a Latin hypercube or Sobol points."""
+    p = box.shape[0]
+    found: list[np.ndarray] = []
+    for _ in range(50):
+        draw = (qmc.LatinHypercube(d=p, seed=rng) if latin else
+                qmc.Sobol(d=p, scramble=True, seed=rng)).random(max(count, 8) * 4 if not latin
+                                                                 else count)
+        points = qmc.scale(draw, box[:, 0], box[:, 1])
+        found.extend(points[inside(points)])
+        if len(found) >= count:
+            break
+    if not found:
+        raise SlipwaveError(f"the {law} law's search box {box.tolist()} holds no point of its "
+                            "prior")
+    return np.array(found[:count])
+
+
+@dataclass
+class Surrogate:
+    """A Gaussian process of the log-likelihood's distance from its best, in log.
+
+    BOLFI's transform (Gutmann and Corander 2016 model a log discrepancy): with m the
+    best log-likelihood evaluated, the process models log(m + 1 - loglik), which is 0 at
+    the best guess and grows by a few units where the log-likelihood falls by
+    thousands, a surface a stationary process can follow; the log-likelihood is read
+    back as m + 1 - exp(prediction).
+
+    Attributes
+    ----------
+    process
+        The fitted process (inputs scaled to the box, :func:`scaled`).
+    top
+        m.
+    box
+        The box the inputs were scaled by.
+
+    """
+
+    process: GaussianProcessRegressor
+    top: float
+    box: np.ndarray
+
+    def loglik(self, points: np.ndarray) -> np.ndarray:
+        """The surrogate's log-likelihood at points (the search's coordinates).
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters).
+
+        Returns
+        -------
+        numpy.ndarray
+            One per point.
+
+        """
+        return self.top + 1.0 - np.exp(self.process.predict(scaled(points, self.box)))
+
+    def upper(self, points: np.ndarray, exploration: float) -> np.ndarray:
+        """The log-likelihood's upper confidence bound (the distance's lower one).
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters).
+        exploration
+            Standard deviations of the process below its mean.
+
+        Returns
+        -------
+        numpy.ndarray
+            One per point.
+
+        """
+        mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
+        return self.top + 1.0 - np.exp(mean - exploration * sd)
+
+
+def surrogate(points: np.ndarray, logliks: np.ndarray, box: np.ndarray, seed: int
+              ) -> Surrogate:
+    """A Gaussian process fitted to the log-likelihoods (:class:`Surrogate`).
+
+    Parameters
+    ----------
+    points
+        Shape (n, parameters), the search's coordinates.
+    logliks
+        The finite log-likelihoods at ``points``.
+    box
+        The search box.
+    seed
+        The optimiser's restarts' seed.
+
+    Returns
+    -------
+    Surrogate
+        Fitted on points scaled to [0, 1] (:func:`scaled`).
+
+    """
+    top = float(logliks.max())
+    p = points.shape[1]
+    kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(p, 0.3), (1e-2, 1e1))
+              + WhiteKernel(1e-2, (1e-6, 1e1)))
+    process = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=2,
+                                       random_state=seed)
+    with warnings.catch_warnings():  # a length scale at its bound is an answer, not a fault
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        process.fit(scaled(points, box), np.log(top + 1.0 - logliks))
+    return Surrogate(process, top, box)
+
+
+MIN_STEPS = 300
+"""Steps of each emcee walker at least; the first half is discarded (burn-in)."""
+
+
+def scaled(points: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Points in the box's unit cube.
+
+    Parameters
+    ----------
+    points
+        Shape (n, parameters).
+    box
+        Shape (parameters, 2).
+
+    Returns
+    -------
+    numpy.ndarray
+        (points - low) / (high - low).
+
+    """
+    return (points - box[:, 0]) / (box[:, 1] - box[:, 0])
+
+
+def sample_posterior(process: Surrogate, box: np.ndarray,
+                     inside: Callable[[np.ndarray], np.ndarray], starts: np.ndarray, *,
+                     samples: int, seed: int) -> np.ndarray:
+    """Samples of prior x exp(surrogate mean) over the box (emcee).
+
+    Parameters
+    ----------
+    process
+        The surrogate (:func:`surrogate`).
+    box
+        The search box.
+    inside
+        Whether a point lies in the box and the prior.
+    starts
+        The best points evaluated: the walkers start around them.
+    samples
+        Samples kept.
+    seed
+        The sampler's seed.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (samples, parameters), the search's coordinates.
+
+    """
+    p = box.shape[0]
+    walkers = max(4 * p, 16)
+
+    def log_probability(x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(x)
+        keep = inside(x)
+        out = np.full(x.shape[0], -np.inf)
+        if keep.any():
+            out[keep] = process.loglik(x[keep])
+        return out
+
+    rng = np.random.default_rng(seed)
+    width = 0.01 * (box[:, 1] - box[:, 0])
+    start: list[np.ndarray] = []
+    while len(start) < walkers:
+        x = starts[len(start) % len(starts)] + rng.normal(0.0, width)
+        if inside(x)[0]:
+            start.append(x)
+    sampler = emcee.EnsembleSampler(walkers, p, log_probability, vectorize=True)
+    sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
+    steps = max(MIN_STEPS, 4 * samples // walkers)
+    sampler.run_mcmc(np.array(start), steps, progress=False)
+    chain = sampler.get_chain(discard=steps // 2, flat=True)
+    return chain[rng.choice(chain.shape[0], size=min(samples, chain.shape[0]), replace=False)]
+
+
+def log_evidence(process: Surrogate, box: np.ndarray, law: str,
+                 inside: Callable[[np.ndarray], np.ndarray], samples: np.ndarray, seed: int, *,
+                 draws: int = 4000) -> float:
+    """The log of the law's evidence: the prior's mean of exp(surrogate mean).
+
+    By importance sampling from a normal fitted to the posterior samples, its
+    covariance doubled (a proposal wider than the posterior); the prior is uniform over
+    its support, whose volume is measured by drawing its bounds' box.
+
+    Parameters
+    ----------
+    process, box, inside
+        As in :func:`sample_posterior`.
+    law
+        The law (its prior's bounds).
+    samples
+        Posterior samples (the search's coordinates).
+    seed
+        The draws' seed.
+    draws
+        Importance draws.
+
+    Returns
+    -------
+    float
+        log Z.
+
+    """
+    rng = np.random.default_rng(seed)
+    bounds = prior_bounds(law)
+    uniform = rng.uniform(bounds[:, 0], bounds[:, 1], (draws, bounds.shape[0]))
+    support = float(np.mean(prior_mask(law, uniform)))
+    log_volume = float(np.sum(np.log(bounds[:, 1] - bounds[:, 0]))) + np.log(max(support,
+                                                                                1e-12))
+    covariance = 2.0 * np.atleast_2d(np.cov(samples.T)) + 1e-12 * np.eye(samples.shape[1])
+    proposal = multivariate_normal(samples.mean(axis=0), covariance, seed=rng)
+    x = np.atleast_2d(proposal.rvs(draws))
+    keep = inside(x)
+    if not keep.any():
+        return float("-inf")
+    log_weights = np.full(draws, -np.inf)
+    log_weights[keep] = process.loglik(x[keep]) - proposal.logpdf(x[keep])
+    return float(logsumexp(log_weights) - np.log(draws) - log_volume)
+
+
+def _zoomed(samples: np.ndarray, best: np.ndarray, box: np.ndarray, bounds: np.ndarray
+            ) -> np.ndarray:
+    """The next stage's box: the posterior's 99 % range and the best guesses, widened.
+
+    The surrogate can be wrong where few guesses were made: the best guesses evaluated
+    stay inside, and a box whose best guess lies at its edge reaches beyond it.
+    """
+    low, high = np.quantile(samples, [0.005, 0.995], axis=0)
+    low, high = np.minimum(low, best.min(axis=0)), np.maximum(high, best.max(axis=0))
+    span = np.maximum(high - low, MIN_SPAN * (bounds[:, 1] - bounds[:, 0]))
+    centre = 0.5 * (low + high)
+    zoomed = np.column_stack([centre - ZOOM * span, centre + ZOOM * span])
+    width = box[:, 1] - box[:, 0]
+    edge = EDGE * width
+    zoomed[:, 0] = np.where(best[0] <= box[:, 0] + edge, np.minimum(zoomed[:, 0],
+                                                                    box[:, 0] - 0.5 * width),
+                            zoomed[:, 0])
+    zoomed[:, 1] = np.where(best[0] >= box[:, 1] - edge, np.maximum(zoomed[:, 1],
+                                                                    box[:, 1] + 0.5 * width),
+                            zoomed[:, 1])
+    return np.column_stack([np.maximum(zoomed[:, 0], bounds[:, 0]),
+                            np.minimum(zoomed[:, 1], bounds[:, 1])])
+
+
+ZOOM = 1.0
+"""A stage's box spans the previous posterior's 99 % range twice over (ZOOM each side of
+its centre): room for the surrogate to see the likelihood fall."""
+EDGE = 0.05
+"""A best guess within this share of the box's width from an edge: the box reaches half
+its width beyond that edge (within the prior)."""
+MIN_SPAN = 0.002
+"""The narrowest box, as a share of the prior's range in each coordinate."""
+SETTLED = 0.5
+"""The search stops zooming once no coordinate's box shrinks below this share of the
+previous stage's."""
+
+
+def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
+               loglik: Callable[[list[np.ndarray], np.ndarray], np.ndarray], box: np.ndarray,
+               settings: SearchSettings, *, dc_per_excess: float = 0.0) -> Posterior:
+    """A law's posterior on a test, by a Gaussian-process surrogate of its likelihood.
+
+    In stages: a Latin hypercube over the box, points added at the surrogate's upper
+    confidence bound, then the box zoomed onto the surrogate posterior's 99 % range
+    (:data:`ZOOM`), until it no longer shrinks (:data:`SETTLED`) or
+    ``settings.stages`` are done; last, points drawn from the surrogate's posterior,
+    the surrogate refitted after each. A posterior a fraction of a percent wide in a
+    box the prior's width could not be resolved by one stationary surrogate.
+
+    Parameters
+    ----------
+    law
+        One of :data:`~slipwave.fit.laws.LAWS`.
+    simulate
+        The ensemble's feature vectors of the law's parameters (by name), shape
+        (members, features).
+    loglik
+        The synthetic log-likelihoods of runs of :func:`simulate`, given which of them
+        to pool the ensemble's scatter over (those near the box:
+        :class:`~slipwave.fit.likelihood.SyntheticLikelihood`).
+    box
+        Where to search first, shape (parameters, 2), in the prior's coordinates
+        (:func:`~slipwave.fit.laws.to_coordinates`); clipped to the prior's bounds.
+    settings
+        How far to search.
+    dc_per_excess
+        The shortest Dc the fit's mesh resolves per unit of fs - fd, mm
+        (:func:`~slipwave.fit.laws.in_prior`).
+
+    Returns
+    -------
+    Posterior
+        Its samples and evidence, and the points evaluated.
+
+    Raises
+    ------
+    SlipwaveError
+        If fewer than two evaluated points have a finite likelihood (the solver
+        followed no law tried).
+
+    """
+    began = clock.perf_counter()
+    bounds = prior_bounds(law)
+    box = np.column_stack([np.maximum(box[:, 0], bounds[:, 0]),
+                           np.minimum(box[:, 1], bounds[:, 1])])
+    p = box.shape[0]
+    rng = np.random.default_rng(settings.seed)
+    points: list[np.ndarray] = []
+    runs: list[np.ndarray] = []
+
+    def evaluate(x: np.ndarray) -> None:
+        points.append(x)
+        runs.append(simulate(from_coordinates(law, x)))
+
+    def near_box(box: np.ndarray) -> np.ndarray:
+        x = np.array(points)
+        margin = 0.5 * (box[:, 1] - box[:, 0])
+        return (np.all(x >= box[:, 0] - margin, axis=1)
+                & np.all(x <= box[:, 1] + margin, axis=1))
+
+    def fitted(box: np.ndarray) -> tuple[Surrogate, np.ndarray]:
+        # the surrogate over the points near the box, and the best of them
+        x = np.array(points)
+        near = near_box(box)
+        y = loglik(runs, near)
+        near &= np.isfinite(y)
+        if near.sum() < 2:
+            raise SlipwaveError(f"the solver followed fewer than two {law} laws of "
+                                f"{len(values)} tried near {box.tolist()}: no likelihood "
+                                "to search")
+        process = surrogate(x[near], y[near], box, int(rng.integers(2**31)))
+        return process, x[near][np.argsort(y[near])[::-1][: max(2, p)]]
+
+    for stage in range(settings.stages):
+        inside = _inside(law, box, dc_per_excess)
+        for x in _fill(law, box, settings.design * p, rng, inside, latin=True):
+            evaluate(x)
+        for _ in range(settings.acquisitions * p):
+            process, _ = fitted(box)
+            candidates = _fill(law, box, 1024, rng, inside, latin=False)
+            evaluate(candidates[int(np.argmax(process.upper(candidates,
+                                                            settings.exploration)))])
+        if stage == settings.stages - 1:
+            break
+        process, best = fitted(box)
+        draws = sample_posterior(process, box, inside, best, samples=1000,
+                                 seed=int(rng.integers(2**31)))
+        zoomed = _zoomed(draws, best, box, bounds)
+        shrink = (zoomed[:, 1] - zoomed[:, 0]) / (box[:, 1] - box[:, 0])
+        within = np.all((zoomed[:, 0] >= box[:, 0]) & (zoomed[:, 1] <= box[:, 1]))
+        if stage > 0 and within and np.all(shrink > SETTLED):
+            break
+        box = zoomed
+    inside = _inside(law, box, dc_per_excess)
+    process, best = fitted(box)
+    for _ in range(settings.refinements * p):
+        draws = sample_posterior(process, box, inside, best, samples=200,
+                                 seed=int(rng.integers(2**31)))
+        evaluate(draws[int(rng.integers(draws.shape[0]))])
+        process, best = fitted(box)
+    samples = sample_posterior(process, box, inside, best, samples=settings.samples,
+                               seed=int(rng.integers(2**31)))
+    evidence = log_evidence(process, box, law, inside, samples, int(rng.integers(2**31)))
+    natural = np.array([list(from_coordinates(law, row).values()) for row in samples])
+    values = loglik(runs, near_box(box))
+    return Posterior(law, natural, evidence, np.array(points), values, box,
+                     clock.perf_counter() - began, process)
