@@ -34,7 +34,7 @@ from typing import Any
 
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
 from slipwave.defaults import FIT_ELEMENTS
-from slipwave.fit import fit_test, measured_events
+from slipwave.fit import FitSettings, fit_test, measured_events
 from slipwave.io import read_acquisition
 from slipwave.setup import read_test_setup
 from targets import check, finish
@@ -59,8 +59,9 @@ def one(job: tuple[int, int, int]) -> dict[str, Any]:
     result = simulate_test(spec, seed=seed)
     with tempfile.TemporaryDirectory() as folder:
         recording = read_acquisition(write_test(result, Path(folder))["csv"])
-    fit = fit_test(read_test_setup(recording, CELLS), measured_events(recording),
-                   laws=[family], elements=fitted, check_mesh=False)  # it fits 2M itself
+    settings = FitSettings.from_values({"elements": fitted, "mesh_check": False})
+    fit = fit_test(read_test_setup(recording, CELLS), measured_events(recording), settings,
+                   laws=[family])  # it fits 2M itself
     return {"truth": k, "made": made, "fitted": fitted,
             "parameters": fit["laws"][family]["parameters"],
             "seconds": time.perf_counter() - start}
