@@ -305,7 +305,7 @@ def test_a_broken_fit_json_names_line_and_column(made, out, capsys):
             r"cut.json, line 1, column \d+: not valid JSON")
 
 
-def test_a_run_in_of_a_fractional_number_of_slips_is_simulated(made, out, capsys):
+def test_a_run_in_of_a_fractional_number_of_slips_is_simulated(made, out, tmp_path):
     """A fitted run-in's length need not be whole: the simulation takes 2.5 slips."""
     law = json.loads(made["fit.json"].read_text())["laws"]["coulomb"]
     run_in = {**law, "law": "run-in", "parameters": {
@@ -313,7 +313,8 @@ def test_a_run_in_of_a_fractional_number_of_slips_is_simulated(made, out, capsys
         | {"runin_slips": {"value": 2.5, "low": 2, "high": 3}}}
     path = edited_fit(made, out, laws={"run-in": run_in}, chosen="run-in",
                       parameters={"fs": 0.7, "fd": 0.6, "fs_final": 0.8, "runin_slips": 2.5})
-    assert main(["simulate", "--fit", str(path), "-o", str(out / "s.nc")]) == 0
+    assert main(["simulate", "--fit", str(path), "-o", str(tmp_path / "s.nc")]) == 0
+    assert (tmp_path / "s.nc").exists()
 
 
 def test_a_comparison_json_without_test_id(made, out, capsys, tmp_path):

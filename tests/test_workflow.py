@@ -31,8 +31,8 @@ SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n
              "  elements: 40\n  band_elements: 20\n")
 # and each test's fit is Coulomb's alone, a short search (the full fit is benchmarked), on
 # the fit's default mesh
-SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  stages: 1\n"
-             "  design: 2\n  acquisitions: 1\n  refinements: 0\n  predictive_members: 3\n")
+SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  stages: 2\n"
+             "  design: 3\n  acquisitions: 1\n  refinements: 1\n  predictive_members: 3\n")
 NO_FIT = "fit:\n  enabled: false\n"
 
 

@@ -123,7 +123,7 @@ def pooled_covariance(runs: list[np.ndarray]) -> np.ndarray:
     Examples
     --------
     >>> runs = [np.array([[0.0, 1.0], [2.0, 1.0]]), np.array([[10.0, 3.0], [12.0, 5.0]])]
-    >>> np.diag(pooled_covariance(runs)).tolist()
+    >>> np.diag(pooled_covariance(runs)).round(9).tolist()
     [2.0, 1.0]
     """
     deviations, freedom = [], 0
