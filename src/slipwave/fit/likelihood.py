@@ -51,13 +51,16 @@ def shrunk_covariance(members: np.ndarray) -> np.ndarray:
     >>> np.diag(shrunk_covariance(members)).round(3).tolist()
     [1.0, 2.333, 0.0]
     """
-    sd = members.std(axis=0, ddof=1)
+    return _shrunk(members - members.mean(axis=0), members.std(axis=0, ddof=1))
+
+
+def _shrunk(deviations: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """The covariance of deviations of these standard deviations, correlations shrunk."""
     varies = sd > 0
-    covariance = np.zeros((members.shape[1], members.shape[1]))
+    covariance = np.zeros((deviations.shape[1], deviations.shape[1]))
     if varies.sum() >= 2:
-        z = (members[:, varies] - members[:, varies].mean(axis=0)) / sd[varies]
-        correlation, _ = ledoit_wolf(z, assume_centered=True)
-        # ledoit_wolf divides by K: back to the unbiased scale's unit diagonal
+        correlation, _ = ledoit_wolf(deviations[:, varies] / sd[varies], assume_centered=True)
+        # ledoit_wolf divides by the rows: back to a unit diagonal, the variances kept
         correlation = correlation / np.sqrt(np.outer(np.diag(correlation),
                                                      np.diag(correlation)))
         covariance[np.ix_(varies, varies)] = correlation * np.outer(sd[varies], sd[varies])
@@ -135,17 +138,7 @@ def pooled_covariance(runs: list[np.ndarray]) -> np.ndarray:
     if not deviations:
         raise ValueError("no run has two members to pool")
     stacked = np.vstack(deviations)
-    sd = np.sqrt(np.sum(stacked**2, axis=0) / freedom)
-    varies = sd > 0
-    covariance = np.zeros((stacked.shape[1], stacked.shape[1]))
-    if varies.sum() >= 2:
-        correlation, _ = ledoit_wolf(stacked[:, varies] / sd[varies], assume_centered=True)
-        correlation = correlation / np.sqrt(np.outer(np.diag(correlation),
-                                                     np.diag(correlation)))
-        covariance[np.ix_(varies, varies)] = correlation * np.outer(sd[varies], sd[varies])
-    elif varies.any():
-        covariance[varies, varies] = sd[varies] ** 2
-    return covariance
+    return _shrunk(stacked, np.sqrt(np.sum(stacked**2, axis=0) / freedom))
 
 
 def pooled_logliks(observed: np.ndarray, runs: list[np.ndarray], covariance: np.ndarray,
