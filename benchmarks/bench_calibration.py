@@ -57,7 +57,7 @@ from slipwave.fit import FitSettings, measured_events
 from slipwave.fit.laws import LAWS, draw_prior
 from slipwave.fit.procedure import dc_per_excess, fit_laws, predictive_check
 from slipwave.io import read_acquisition
-from slipwave.setup import read_test_setup
+from slipwave.setup import Setting, TestSetup, read_test_setup
 from targets import check, finish
 
 CELLS = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
@@ -75,7 +75,6 @@ def draw_test(seed: int, index: int) -> tuple[BenchTest, dict[str, Any], dict[st
     law = str(rng.choice(list(LAWS)))
     probe = BenchTest("probe", elements=BENCH_ELEMENTS, video="none")
     # the prior stops at the Dc the fit's mesh resolves (its process zone, 3 elements)
-    from slipwave.setup import Setting, TestSetup
     setup = TestSetup("probe", {key: Setting(value, "bench") for key, value in {
         "length_mm": probe.length, "width_mm": probe.width,
         "youngs_modulus_mpa": probe.youngs_modulus, "poisson_ratio": probe.poisson_ratio,

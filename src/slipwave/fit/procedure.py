@@ -24,7 +24,6 @@ from slipwave.defaults import (
     FIT_DEFAULTS,
     FIT_ELEMENTS,
     FIT_MESH_CHECK,
-    FIT_TUNABLES,
     LOAD_CALIBRATION,
 )
 from slipwave.errors import SlipwaveError
@@ -98,11 +97,9 @@ class FitSettings:
         >>> FitSettings.from_values({"members": 6}).members
         6
         """
-        given = {key: values[key] for key in FIT_TUNABLES if key in values}
-        v = {**FIT_DEFAULTS, "elements": FIT_ELEMENTS, "load_calibration": LOAD_CALIBRATION,
-             "mesh_check": FIT_MESH_CHECK, **given,
-             **{key: values[key] for key in ("elements", "load_calibration", "mesh_check")
-                if key in values}}
+        defaults = {**FIT_DEFAULTS, "elements": FIT_ELEMENTS,
+                    "load_calibration": LOAD_CALIBRATION, "mesh_check": FIT_MESH_CHECK}
+        v = {key: values.get(key, default) for key, default in defaults.items()}
         return cls(elements=int(v["elements"]), members=int(v["members"]),
                    nuisances=Nuisances(float(v["load_calibration"]), float(v["stiffness_error"]),
                                        float(v["speed_error"]), float(v["step_jitter"])),
