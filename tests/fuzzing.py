@@ -89,7 +89,7 @@ def valid_fit(**changes: object) -> dict:
            "parameters": {"fs": {"value": 0.8, "low": 0.75, "high": 0.85, "units": "1"},
                           "fd": {"value": 0.6, "low": 0.55, "high": 0.65, "units": "1"}},
            "log_evidence": -12.5, "log_bayes_factor": 0.0, "rejected": False,
-           "guesses": 20, "simulations": 80}
+           "guesses": 20, "simulations": 80, "mesh_error": {"first_ratio": 0.004}}
     fit = {"test_id": "small", "recording_sha256": "0" * 64, "setup": SETUP, "elements": 16,
            "detection": {"threshold": 8.0, "max_spike": 2, "max_duration": None,
                          "min_fall_rate": 1.2, "edge_convention": "auto"},

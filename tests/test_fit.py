@@ -14,7 +14,7 @@ from slipwave.bench.generate import BenchTest, simulate_test, write_test
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
 from slipwave.fit import FitSettings, fit_test, measured_events, read_fit, slip_features
-from slipwave.fit.ensemble import Ensemble, Member, Nuisances, draw_members
+from slipwave.fit.ensemble import Ensemble, Member, Nuisances, draw_members, mesh_error
 from slipwave.fit.features import (
     FEATURES,
     edge_threshold,
@@ -38,7 +38,7 @@ from slipwave.fit.likelihood import (
     synthetic_loglik,
 )
 from slipwave.fit.procedure import band_z, dc_per_excess, fd_start, first_box
-from slipwave.fit.search import SearchSettings, search_law
+from slipwave.fit.search import SearchSettings, sample_posterior, search_law, surrogate
 from slipwave.fits import fits_table
 from slipwave.io import read_acquisition
 from slipwave.setup import TestSetup, read_test_setup
@@ -221,6 +221,26 @@ def test_the_search_recovers_a_known_gaussian_posterior():
     assert posterior.points.shape[0] == posterior.logliks.size >= 2 * 3 * 2
 
 
+def test_the_sampler_starts_when_the_best_guesses_lie_outside_its_box():
+    """A best guess kept from beside the box (or on the prior's edge) once hung the search."""
+    rng = np.random.default_rng(7)
+    box = np.array([[0.8, 1.0], [0.55, 0.65]])
+    points = rng.uniform(box[:, 0], box[:, 1], (20, 2))
+    logliks = -0.5 * np.sum(((points - [0.9, 0.6]) / 0.02) ** 2, axis=1)
+    process = surrogate(points, logliks, box, seed=0)
+
+    def inside(x):
+        x = np.atleast_2d(x)
+        return np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1) & (x[:, 0] - x[:, 1] > 0.25)
+
+    outside = np.array([[1.3, 0.5], [0.5, 0.9]])  # beyond the box on both sides
+    samples = sample_posterior(process, box, inside, outside, samples=200, seed=1)
+    assert samples.shape == (200, 2) and inside(samples).all()
+    with pytest.raises(SlipwaveError, match="too little of the prior"):
+        sample_posterior(process, box, lambda x: np.zeros(np.atleast_2d(x).shape[0], bool),
+                         outside, samples=10, seed=1)
+
+
 def test_evidence_prefers_the_law_the_data_need():
     """Data whose third feature only a law with a length reaches: slip-weakening's Dc."""
     rng = np.random.default_rng(5)
@@ -245,6 +265,52 @@ def test_evidence_prefers_the_law_the_data_need():
     assert rich.log_evidence > simple.log_evidence + np.log(100)
     dc = rich.summary()["dc"]
     assert dc["low"] < 0.01 * 10**0.75 < dc["high"]
+
+
+class _Meshed:
+    """A stand-in for an ensemble on one mesh: members' features = law's + offset + noise."""
+
+    def __init__(self, members, offset, sd, seed):
+        self.members, self.offset, self.sd, self.seed = members, offset, sd, seed
+
+    def features(self, law, params):
+        rng = np.random.default_rng(self.seed)
+        return params["fs"] + self.offset + rng.normal(0.0, self.sd, (len(self.members), 3))
+
+
+def test_the_mesh_error_is_the_meshes_difference_beyond_the_members_scatter():
+    members = draw_members(Nuisances(0.005, 0.02, 0.002, 0.2), 40, seed=1)
+    offset = np.array([0.0, 0.05, -0.2])
+    coarse = _Meshed(members, np.zeros(3), 0.01, seed=1)
+    fine = _Meshed(members, offset, 0.01, seed=2)
+    error = mesh_error(coarse, fine, "coulomb", {"fs": 0.9, "fd": 0.6})
+    # a feature the meshes agree on has (almost) none; the others their offset
+    assert error[0] < 0.005
+    assert error[1:] == pytest.approx(np.abs(offset[1:]), abs=0.005)
+    with pytest.raises(ValueError, match="same members"):
+        mesh_error(coarse, _Meshed(members[:3], offset, 0.01, seed=2), "coulomb",
+                   {"fs": 0.9, "fd": 0.6})
+
+
+def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
+    """A feature off by a mesh error of 0.05: without it fs is pulled, with it covered."""
+    observed = np.array([0.9, 0.6, 0.35])  # fs - fd reads 0.05 high, as a coarse mesh may
+    settings = SearchSettings(stages=2, design=3, acquisitions=2, refinements=1,
+                              exploration=2.0, samples=1000, seed=0)
+    box = np.array([[0.6, 1.2], [0.45, 0.75]])
+    likelihood = SyntheticLikelihood(observed, np.full(3, 1e-3))
+    runs = {}
+    for carried in (None, np.array([0.0, 0.0, 0.05])):
+        posterior = search_law("coulomb", _gaussian_simulator(np.random.default_rng(6), 0.005),
+                               likelihood, box, settings,
+                               model_error=None if carried is None else lambda p, e=carried: e)
+        runs["with" if carried is not None else "without"] = posterior
+    fs_without = runs["without"].summary()["fs"]
+    fs_with = runs["with"].summary()["fs"]
+    assert not fs_without["low"] <= 0.9 <= fs_without["high"]
+    assert fs_with["low"] <= 0.9 <= fs_with["high"]
+    assert runs["with"].model_error.tolist() == [0.0, 0.0, 0.05]
+    assert runs["without"].model_error is None
 
 
 def test_members_draw_what_the_recording_does_not_fix(virtual):
@@ -281,7 +347,10 @@ def test_a_whole_fit_writes_a_fit_json_that_reads_back(virtual, tmp_path):
     assert fit["chosen"] == "coulomb" and fit["mesh_check"] is None
     law = fit["laws"]["coulomb"]
     assert law["log_bayes_factor"] == 0.0 and not law["rejected"]
-    assert law["simulations"] == 2 * law["guesses"]
+    # two members per guess, and the best first-stage guess's members at twice the mesh
+    assert law["simulations"] == 2 * law["guesses"] + 2
+    assert set(law["mesh_error"]) == set(FEATURES)
+    assert all(value >= 0 for value in law["mesh_error"].values())
     # a search this small (2 members, 2 stages) still finds fd to a few percent
     assert law["parameters"]["fd"]["value"] == pytest.approx(TRUTH["fd"], rel=0.06)
     assert set(fit["predictive"]) == set(FEATURES) == set(fit["features"])

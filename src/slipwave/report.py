@@ -295,9 +295,10 @@ def predictive_rows(fit: dict[str, Any]) -> dict[str, Any]:
     -------
     dict
         ``predictive`` (rows: ``name``, ``meaning``, ``measured``, ``simulated``,
-        ``spread``, ``z``, ``agrees``), ``predictive_differs`` (the features' meanings
-        where it differs), ``predictive_z`` (the band's half-width in standard
-        deviations), ``predictive_members`` and ``members``.
+        ``spread``, ``z``, ``agrees``, ``mesh_error``: the chosen law's error from the
+        mesh in that feature, in the spread, or None), ``predictive_differs`` (the
+        features' meanings where it differs), ``predictive_z`` (the band's half-width
+        in standard deviations), ``predictive_members`` and ``members``.
 
     Examples
     --------
@@ -308,7 +309,9 @@ def predictive_rows(fit: dict[str, Any]) -> dict[str, Any]:
     ('T/|N| before the first slip of any kind', [])
     """
     checks = fit.get("predictive") or {}
-    rows = [{"name": name, "meaning": FEATURES.get(name, name), **check}
+    mesh = (fit.get("laws", {}).get(fit.get("chosen"), {}).get("mesh_error") or {})
+    rows = [{"name": name, "meaning": FEATURES.get(name, name), **check,
+             "mesh_error": mesh.get(name)}
             for name, check in checks.items()]
     settings = fit.get("settings", {})
     return {"predictive": rows,

@@ -272,3 +272,48 @@ class Ensemble:
                     rows.append(np.full(len(FEATURES), np.nan))
             self._runs[key] = np.array(rows)
         return self._runs[key]
+
+
+def mesh_error(coarse: Ensemble, fine: Ensemble, law: str, params: Mapping[str, float]
+               ) -> np.ndarray:
+    """Each feature's error from the mesh at a guess: the fit's mesh against a finer one.
+
+    The numerical uncertainty of a validation (ASME V&V 20-2009; Roache 1998): what the
+    fit's mesh computes differs from what a finer one does, and a Coulomb law with
+    fs > fd does not converge at all (docs: "Mesh convergence"), so a measurement made by
+    a finer model or by a real slab differs from the fit's simulations by more than the
+    ensemble's scatter. Both ensembles run the same members; the mean of the members'
+    paired differences is the error, its own sampling scatter taken out (the square of
+    the mean less its variance, floored at 0): a feature on which the meshes agree
+    within the members' scatter has no error from the mesh.
+
+    Parameters
+    ----------
+    coarse, fine
+        The test's ensembles on the fit's mesh and on the finer one (the same members).
+    law
+        One of :data:`~slipwave.fit.laws.LAWS`.
+    params
+        Its parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        One standard error per feature (:data:`~slipwave.fit.features.FEATURES`); 0
+        where fewer than two members ran on both meshes.
+
+    Raises
+    ------
+    ValueError
+        If the two ensembles' members differ.
+
+    """
+    if coarse.members != fine.members:
+        raise ValueError("a mesh error compares the same members on two meshes")
+    differences = fine.features(law, params) - coarse.features(law, params)
+    differences = differences[np.all(np.isfinite(differences), axis=1)]
+    if differences.shape[0] < 2:
+        return np.zeros(len(FEATURES))
+    mean = differences.mean(axis=0)
+    scatter = differences.var(axis=0, ddof=1) / differences.shape[0]
+    return np.sqrt(np.maximum(mean**2 - scatter, 0.0))

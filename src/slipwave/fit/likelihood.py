@@ -191,7 +191,8 @@ class SyntheticLikelihood:
         self.observed = observed
         self.measurement_error = measurement_error
 
-    def __call__(self, runs: list[np.ndarray], pool: np.ndarray) -> np.ndarray:
+    def __call__(self, runs: list[np.ndarray], pool: np.ndarray,
+                 model_error: np.ndarray | None = None) -> np.ndarray:
         """Each run's log-likelihood, the scatter pooled over the runs in ``pool``.
 
         Parameters
@@ -201,6 +202,10 @@ class SyntheticLikelihood:
         pool
             Which runs to pool the scatter over (every run with two members or more
             when none of them has).
+        model_error
+            The model's own error of each feature (the mesh's:
+            :func:`~slipwave.fit.ensemble.mesh_error`), added to the measurement's in
+            quadrature; none by default.
 
         Returns
         -------
@@ -213,4 +218,6 @@ class SyntheticLikelihood:
             covariance = pooled_covariance(chosen)
         except ValueError:
             covariance = pooled_covariance(runs)
-        return pooled_logliks(self.observed, runs, covariance, self.measurement_error)
+        error = (self.measurement_error if model_error is None
+                 else np.hypot(self.measurement_error, model_error))
+        return pooled_logliks(self.observed, runs, covariance, error)

@@ -28,7 +28,7 @@ from slipwave.defaults import (
 )
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings
-from slipwave.fit.ensemble import Ensemble, Nuisances, draw_members
+from slipwave.fit.ensemble import Ensemble, Nuisances, draw_members, mesh_error
 from slipwave.fit.features import FEATURES, detected_edge_threshold, measurement_error
 from slipwave.fit.laws import (
     LAWS,
@@ -264,7 +264,8 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
     ``members`` simulations, each with parameters drawn from the posterior and its own
     nuisances (:func:`~slipwave.fit.ensemble.draw_members`); a feature agrees when the
     measurement lies within z standard deviations of their mean, the spread of the
-    simulations and the measurement's own error in quadrature, z Bonferroni's for
+    simulations, the measurement's own error and the mesh's (the posterior's
+    ``model_error``) in quadrature (ASME V&V 20's validation uncertainty), z Bonferroni's for
     :data:`FAMILY_LEVEL` over all the features: a law that is right then agrees on every
     feature in 95 % of tests.
 
@@ -285,7 +286,7 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
     -------
     dict
         Feature -> ``measured``, ``simulated`` (the mean), ``spread`` (the standard
-        deviation with the measurement's error), ``z`` and ``agrees``.
+        deviation with the measurement's and the mesh's errors), ``z`` and ``agrees``.
 
     """
     rng = np.random.default_rng(seed)
@@ -301,7 +302,8 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
     simulated = np.array(rows)
     z = band_z(len(FEATURES))
     mean = simulated.mean(axis=0)
-    spread = np.hypot(simulated.std(axis=0, ddof=1), error)
+    model = np.zeros(len(FEATURES)) if posterior.model_error is None else posterior.model_error
+    spread = np.sqrt(simulated.var(axis=0, ddof=1) + error**2 + model**2)
     return {name: {"measured": round(float(ensemble.observed[k]), 6),
                    "simulated": round(float(mean[k]), 6),
                    "spread": round(float(spread[k]), 6),
@@ -331,7 +333,8 @@ def law_entry(posterior: Posterior, best_evidence: float, simulations: int,
         ``law``, ``parameters`` (value: posterior median, low and high: its central
         95 % interval, units), ``log_evidence``, ``log_bayes_factor`` (this law's
         against the chosen one, <= 0), ``rejected``, ``guesses``, ``simulations``,
-        ``seconds``.
+        ``seconds``, ``mesh_error`` (each feature's error from the mesh the likelihood
+        carried, or null).
 
     """
     summary = posterior.summary()
@@ -344,7 +347,10 @@ def law_entry(posterior: Posterior, best_evidence: float, simulations: int,
             "rejected": bool(-factor > decisive),
             "guesses": int(posterior.points.shape[0]),
             "simulations": simulations,
-            "seconds": round(posterior.seconds, 2)}
+            "seconds": round(posterior.seconds, 2),
+            "mesh_error": None if posterior.model_error is None else {
+                name: round(float(value), 6)
+                for name, value in zip(FEATURES, posterior.model_error, strict=True)}}
 
 
 DECISIVE = float(np.log(100.0))
@@ -364,6 +370,8 @@ class TestFit:
         Simulations each law's search ran.
     ensemble
         The test's ensemble (its measured features, members and settings).
+    fine
+        The same members at twice the mesh (the mesh's error, the mesh check).
     error
         The measured features' standard errors.
     threshold
@@ -376,6 +384,7 @@ class TestFit:
     posteriors: dict[str, Posterior]
     simulations: dict[str, int]
     ensemble: Ensemble
+    fine: Ensemble
     error: np.ndarray
     threshold: float
 
@@ -421,22 +430,24 @@ def fit_laws(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
     threshold = probe_threshold(setup, measured, elements=settings.elements,
                                 detection=detection, cache=cache)
     members = draw_members(settings.nuisances, settings.members, settings.search.seed)
-    ensemble = Ensemble(setup, measured, members, threshold=threshold,
-                        elements=settings.elements, detection=detection, cache=cache,
-                        nuisances=settings.nuisances)
+    ensemble, fine = (Ensemble(setup, measured, members, threshold=threshold,
+                               elements=elements, detection=detection, cache=cache,
+                               nuisances=settings.nuisances)
+                      for elements in (settings.elements, 2 * settings.elements))
     error = measurement_error(ensemble.measured, ratio_error=settings.ratio_error,
                               time_error=settings.time_error)
     likelihood = SyntheticLikelihood(ensemble.observed, error)
     posteriors: dict[str, Posterior] = {}
     simulations: dict[str, int] = {}
     for law in sorted(laws, key=list(LAWS).index):
-        before = ensemble.simulations
+        before = ensemble.simulations + fine.simulations
         box = first_box(law, measured, posteriors.get("coulomb"))
         posteriors[law] = search_law(law, partial(ensemble.features, law),
                                      likelihood, box, settings.search,
-                                     dc_per_excess=dc_per_excess(setup, settings.elements))
-        simulations[law] = ensemble.simulations - before
-    return TestFit(posteriors, simulations, ensemble, error, threshold)
+                                     dc_per_excess=dc_per_excess(setup, settings.elements),
+                                     model_error=partial(mesh_error, ensemble, fine, law))
+        simulations[law] = ensemble.simulations + fine.simulations - before
+    return TestFit(posteriors, simulations, ensemble, fine, error, threshold)
 
 
 def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
@@ -483,8 +494,7 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
     ensemble = fitted.ensemble
     predictive = predictive_check(ensemble, chosen, settings.predictive_members,
                                   settings.search.seed, fitted.error)
-    finer = (mesh_check(setup, measured, chosen, settings, threshold=fitted.threshold,
-                        detection=detection, cache=cache) if settings.mesh_check else None)
+    finer = mesh_check(fitted, chosen, settings) if settings.mesh_check else None
     summary = chosen.summary()
     return {"test_id": setup.test_id, "setup": setup.to_dict(),
             "elements": settings.elements, "detection": detection.to_dict(),
@@ -514,26 +524,25 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
             "mesh_check": finer}
 
 
-def mesh_check(setup: TestSetup, measured: pd.DataFrame, posterior: Posterior,
-               settings: FitSettings, *, threshold: float,
-               detection: DetectionSettings = DEFAULT_DETECTION,
-               cache: SolverCache | None = None) -> dict[str, Any]:
+def mesh_check(fitted: TestFit, posterior: Posterior, settings: FitSettings
+               ) -> dict[str, Any]:
     """The chosen law searched again at twice the mesh, within its posterior's box.
 
     One stage of the search (:func:`~slipwave.fit.search.search_law`) over the box the
-    posterior ended in, the same measured features (the fit's edge threshold), the
-    same members. A law with a length scale (slip-weakening's Dc) converges once its
-    process zone spans a few elements; Coulomb's law with fs > fd and run-in have none,
-    and their coefficients are the mesh-dependent limit (docs: "Mesh convergence").
+    posterior ended in, on the fit's finer ensemble (the same members, the same
+    measured features and edge threshold). A law with a length scale (slip-weakening's
+    Dc) converges once its process zone spans a few elements; Coulomb's law with
+    fs > fd and run-in have none, and their coefficients are the mesh-dependent limit
+    (docs: "Mesh convergence").
 
     Parameters
     ----------
-    setup, measured, settings, detection, cache
-        As in :func:`fit_test`.
+    fitted
+        The test's fit (:func:`fit_laws`).
     posterior
         The chosen law's, on the fit's mesh.
-    threshold
-        The fit's edge threshold.
+    settings
+        As in :func:`fit_test`.
 
     Returns
     -------
@@ -544,12 +553,9 @@ def mesh_check(setup: TestSetup, measured: pd.DataFrame, posterior: Posterior,
         the posterior median; null for a law without a length).
 
     """
-    elements = 2 * settings.elements
-    members = draw_members(settings.nuisances, settings.members, settings.search.seed)
-    ensemble = Ensemble(setup, measured, members, threshold=threshold, elements=elements,
-                        detection=detection, cache=cache, nuisances=settings.nuisances)
-    error = measurement_error(ensemble.measured, ratio_error=settings.ratio_error,
-                              time_error=settings.time_error)
+    ensemble = fitted.fine
+    elements, setup = ensemble.elements, ensemble.setup
+    before = ensemble.simulations
     local = SearchSettings(stages=1, design=settings.search.design,
                            acquisitions=settings.search.acquisitions, refinements=0,
                            exploration=settings.search.exploration,
@@ -557,8 +563,8 @@ def mesh_check(setup: TestSetup, measured: pd.DataFrame, posterior: Posterior,
     law = posterior.law
     values = {name: entry["value"] for name, entry in posterior.summary().items()}
     finer = search_law(law, partial(ensemble.features, law),
-                       SyntheticLikelihood(ensemble.observed, error), posterior.box, local,
-                       dc_per_excess=dc_per_excess(setup, elements))
+                       SyntheticLikelihood(ensemble.observed, fitted.error), posterior.box,
+                       local, dc_per_excess=dc_per_excess(setup, elements))
     summary = finer.summary()
     zone = setup.process_zone(law_of(law, values))
     return {"elements": elements, "law": law,
@@ -566,6 +572,6 @@ def mesh_check(setup: TestSetup, measured: pd.DataFrame, posterior: Posterior,
                            | {"units": UNITS[name]} for name, entry in summary.items()},
             "change": {name: round((summary[name]["value"] - value) / value, 6)
                        for name, value in values.items()},
-            "simulations": ensemble.simulations, "seconds": round(finer.seconds, 2),
+            "simulations": ensemble.simulations - before, "seconds": round(finer.seconds, 2),
             "process_zone_mm": round(zone, 4) if zone > 0 else None}
 

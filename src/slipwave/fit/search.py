@@ -87,6 +87,9 @@ class Posterior:
         The search box, shape (parameters, 2), in the search's coordinates.
     seconds
         Time the search took.
+    model_error
+        The features' error from the mesh the likelihood carried
+        (:func:`~slipwave.fit.ensemble.mesh_error`), or None.
 
     """
 
@@ -97,6 +100,7 @@ class Posterior:
     logliks: np.ndarray
     box: np.ndarray
     seconds: float = 0.0
+    model_error: np.ndarray | None = None
     surrogate: Surrogate | None = field(default=None, repr=False)
 
     @property
@@ -271,6 +275,34 @@ def scaled(points: np.ndarray, box: np.ndarray) -> np.ndarray:
     return (points - box[:, 0]) / (box[:, 1] - box[:, 0])
 
 
+START_TRIES = 64
+"""Jittered copies of the best guesses drawn per walker to start emcee from, and uniform
+draws of the box after them (a best guess may lie just outside the box or the prior)."""
+
+
+def _walkers_start(starts: np.ndarray, box: np.ndarray,
+                   inside: Callable[[np.ndarray], np.ndarray], walkers: int,
+                   rng: np.random.Generator) -> np.ndarray:
+    """Walkers' first positions: around the best guesses (clipped to the box), in the prior.
+
+    Where too few of the jittered guesses lie in the box and the prior (a best guess on
+    the prior's edge, or one of the guesses near the box kept from outside it), the rest
+    are drawn uniformly over the box.
+    """
+    width = 0.01 * (box[:, 1] - box[:, 0])
+    centres = np.clip(starts, box[:, 0], box[:, 1])
+    tries = (centres[np.arange(START_TRIES * walkers) % len(centres)]
+             + rng.normal(0.0, width, (START_TRIES * walkers, box.shape[0])))
+    found = tries[inside(tries)]
+    if found.shape[0] < walkers:
+        uniform = rng.uniform(box[:, 0], box[:, 1], (START_TRIES * walkers, box.shape[0]))
+        found = np.vstack([found, uniform[inside(uniform)]])
+    if found.shape[0] < walkers:
+        raise SlipwaveError(f"the search box {box.tolist()} holds too little of the prior to "
+                            "start the posterior's sampler")
+    return found[:walkers]
+
+
 def sample_posterior(process: Surrogate, box: np.ndarray,
                      inside: Callable[[np.ndarray], np.ndarray], starts: np.ndarray, *,
                      samples: int, seed: int) -> np.ndarray:
@@ -309,16 +341,10 @@ def sample_posterior(process: Surrogate, box: np.ndarray,
         return out
 
     rng = np.random.default_rng(seed)
-    width = 0.01 * (box[:, 1] - box[:, 0])
-    start: list[np.ndarray] = []
-    while len(start) < walkers:
-        x = starts[len(start) % len(starts)] + rng.normal(0.0, width)
-        if inside(x)[0]:
-            start.append(x)
     sampler = emcee.EnsembleSampler(walkers, p, log_probability, vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
     steps = max(MIN_STEPS, 4 * samples // walkers)
-    sampler.run_mcmc(np.array(start), steps, progress=False)
+    sampler.run_mcmc(_walkers_start(starts, box, inside, walkers, rng), steps, progress=False)
     chain = sampler.get_chain(discard=steps // 2, flat=True)
     return chain[rng.choice(chain.shape[0], size=min(samples, chain.shape[0]), replace=False)]
 
@@ -406,8 +432,10 @@ previous stage's."""
 
 
 def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
-               loglik: Callable[[list[np.ndarray], np.ndarray], np.ndarray], box: np.ndarray,
-               settings: SearchSettings, *, dc_per_excess: float = 0.0) -> Posterior:
+               loglik: Callable[[list[np.ndarray], np.ndarray, np.ndarray | None], np.ndarray],
+               box: np.ndarray, settings: SearchSettings, *, dc_per_excess: float = 0.0,
+               model_error: Callable[[Mapping[str, float]], np.ndarray] | None = None
+               ) -> Posterior:
     """A law's posterior on a test, by a Gaussian-process surrogate of its likelihood.
 
     In stages: a Latin hypercube over the box, points added at the surrogate's upper
@@ -415,7 +443,10 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     (:data:`ZOOM`), until it no longer shrinks (:data:`SETTLED`) or
     ``settings.stages`` are done; last, points drawn from the surrogate's posterior,
     the surrogate refitted after each. A posterior a fraction of a percent wide in a
-    box the prior's width could not be resolved by one stationary surrogate.
+    box the prior's width could not be resolved by one stationary surrogate. With
+    ``model_error``, the model's own error of the features is measured at the first
+    stage's best guess and carried by the likelihood from then on (every
+    log-likelihood is recomputed from the runs).
 
     Parameters
     ----------
@@ -426,8 +457,8 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
         (members, features).
     loglik
         The synthetic log-likelihoods of runs of :func:`simulate`, given which of them
-        to pool the ensemble's scatter over (those near the box:
-        :class:`~slipwave.fit.likelihood.SyntheticLikelihood`).
+        to pool the ensemble's scatter over (those near the box) and the model's error
+        (:class:`~slipwave.fit.likelihood.SyntheticLikelihood`).
     box
         Where to search first, shape (parameters, 2), in the prior's coordinates
         (:func:`~slipwave.fit.laws.to_coordinates`); clipped to the prior's bounds.
@@ -436,6 +467,8 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     dc_per_excess
         The shortest Dc the fit's mesh resolves per unit of fs - fd, mm
         (:func:`~slipwave.fit.laws.in_prior`).
+    model_error
+        The features' error from the mesh at a guess (by name), or None.
 
     Returns
     -------
@@ -457,6 +490,7 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     rng = np.random.default_rng(settings.seed)
     points: list[np.ndarray] = []
     runs: list[np.ndarray] = []
+    error: np.ndarray | None = None
 
     def evaluate(x: np.ndarray) -> None:
         points.append(x)
@@ -472,7 +506,7 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
         # the surrogate over the points near the box, and the best of them
         x = np.array(points)
         near = near_box(box)
-        y = loglik(runs, near)
+        y = loglik(runs, near, error)
         near &= np.isfinite(y)
         if near.sum() < 2:
             raise SlipwaveError(f"the solver followed fewer than two {law} laws of "
@@ -490,6 +524,9 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
             candidates = _fill(law, box, 1024, rng, inside, latin=False)
             evaluate(candidates[int(np.argmax(process.upper(candidates,
                                                             settings.exploration)))])
+        if stage == 0 and model_error is not None:
+            _, best = fitted(box)
+            error = model_error(from_coordinates(law, best[0]))
         if stage == settings.stages - 1:
             break
         process, best = fitted(box)
@@ -512,6 +549,6 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
                                seed=int(rng.integers(2**31)))
     evidence = log_evidence(process, box, law, inside, samples, int(rng.integers(2**31)))
     natural = np.array([list(from_coordinates(law, row).values()) for row in samples])
-    values = loglik(runs, near_box(box))
+    values = loglik(runs, near_box(box), error)
     return Posterior(law, natural, evidence, np.array(points), values, box,
-                     clock.perf_counter() - began, process)
+                     clock.perf_counter() - began, error, process)
