@@ -65,7 +65,7 @@ PRIORS: dict[str, Prior] = {
                 "edge over and the quasi-static solver stops converging)"),
     "fs": Prior(0.35, 1.5, False,
                 "fd plus the static excess (STATIC_EXCESS): stick-slip needs fs above fd"),
-    "fs_final": Prior(0.35, 1.6, False,
+    "fs_final": Prior(0.35, 1.8, False,
                       "fd plus a static excess up to RUNIN_EXCESS, above or below fs: the "
                       "contact may strengthen (ageing, wear-in) or weaken (a film wiped off)"),
     "runin_slips": Prior(1.0, 10.0, False,
@@ -83,8 +83,9 @@ STATIC_EXCESS = (0.05, 0.5)
 """fs - fd: at least 0.05 (below, a gross slip's drop, some (fs - fd) N, is a few newtons
 and the cycle's partial slips hide in the card's noise), at most 0.5 (more, a slab's
 first gross slip releases most of T)."""
-RUNIN_EXCESS = (0.05, 0.6)
-"""fs_final - fd: as :data:`STATIC_EXCESS`, a run-in reaching a little further."""
+RUNIN_EXCESS = (0.05, 0.8)
+"""fs_final - fd: as :data:`STATIC_EXCESS`, a run-in reaching further once the first gross
+slips have worn the contact in (the default campaign's hl050 ends 0.7 above fd)."""
 
 ZONE_ELEMENTS = 3.0
 """Elements a slip-weakening law's process zone spans at least, so that the law's
