@@ -24,6 +24,7 @@ from slipwave.fit.features import (
 )
 from slipwave.fit.laws import (
     LAWS,
+    STATIC_EXCESS,
     ZONE_ELEMENTS,
     draw_prior,
     from_coordinates,
@@ -38,7 +39,13 @@ from slipwave.fit.likelihood import (
     synthetic_loglik,
 )
 from slipwave.fit.procedure import band_z, dc_per_excess, fd_start, first_box
-from slipwave.fit.search import SearchSettings, sample_posterior, search_law, surrogate
+from slipwave.fit.search import (
+    Posterior,
+    SearchSettings,
+    sample_posterior,
+    search_law,
+    surrogate,
+)
 from slipwave.fits import fits_table
 from slipwave.io import read_acquisition
 from slipwave.setup import TestSetup, read_test_setup
@@ -313,6 +320,27 @@ def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
     assert runs["without"].model_error is None
 
 
+def test_the_model_error_is_its_root_mean_square_over_the_posteriors_reach():
+    """Measured at the best guess and along each parameter's posterior, not at one point."""
+    observed = np.array([0.9, 0.6, 0.3])
+    settings = SearchSettings(stages=2, design=3, acquisitions=2, refinements=1,
+                              exploration=2.0, samples=1000, seed=0)
+    likelihood = SyntheticLikelihood(observed, np.full(3, 0.01))
+    measured_at = []
+
+    def model_error(params):
+        measured_at.append((params["fs"], params["fd"]))
+        return np.array([0.0, 0.0, abs(params["fs"] - 0.9)])
+
+    posterior = search_law("coulomb", _gaussian_simulator(np.random.default_rng(6), 0.005),
+                           likelihood, np.array([[0.6, 1.2], [0.45, 0.75]]), settings,
+                           model_error=model_error)
+    fs = np.array([at[0] for at in measured_at])
+    assert 2 <= len(measured_at) <= 3 and len(set(measured_at)) == len(measured_at)
+    assert fs.max() - fs.min() > 0.005  # the posterior's reach, not one guess
+    assert posterior.model_error[2] == pytest.approx(np.sqrt(np.mean((fs - 0.9) ** 2)))
+
+
 def test_members_draw_what_the_recording_does_not_fix(virtual):
     nuisances = Nuisances(0.005, 0.02, 0.002, 0.2)
     members = draw_members(nuisances, 200, seed=1)
@@ -367,6 +395,15 @@ def test_the_first_boxes_follow_the_measurement_and_coulomb(virtual):
     box = first_box("coulomb", events, None)
     assert box[1, 0] < fd_start(events) < box[1, 1]
     assert 4.0 > band_z(13) > 1.96
+    rng = np.random.default_rng(0)
+    coulomb = Posterior("coulomb", np.column_stack([rng.normal(0.95, 0.01, 500),
+                                                    rng.normal(0.47, 0.005, 500)]),
+                        0.0, np.zeros((0, 2)), np.zeros(0), box)
+    # slip-weakening's fs from the prior's floor; the run-in's about Coulomb's
+    weakening = first_box("slip-weakening", events, coulomb)
+    assert weakening[0, 0] == pytest.approx(weakening[1, 0] + STATIC_EXCESS[0])
+    assert weakening[0, 1] > 1.15 and 0.35 < weakening[1, 0] < 0.37 < 0.48 < weakening[1, 1]
+    assert 0.75 < first_box("run-in", events, coulomb)[0, 0] < 0.85
 
 
 def test_missing_geometry_is_one_error_naming_the_column_and_nothing_is_written(
