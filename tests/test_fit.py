@@ -375,8 +375,9 @@ def test_a_whole_fit_writes_a_fit_json_that_reads_back(virtual, tmp_path):
     assert fit["chosen"] == "coulomb" and fit["mesh_check"] is None
     law = fit["laws"]["coulomb"]
     assert law["log_bayes_factor"] == 0.0 and not law["rejected"]
-    # two members per guess, and the best first-stage guess's members at twice the mesh
-    assert law["simulations"] == 2 * law["guesses"] + 2
+    # two members per guess; the mesh error's points: the best first-stage guess's
+    # members at twice the mesh, one or two posterior draws' on both meshes
+    assert law["simulations"] - 2 * law["guesses"] in (2 + 4, 2 + 8)
     assert set(law["mesh_error"]) == set(FEATURES)
     assert all(value >= 0 for value in law["mesh_error"].values())
     # a search this small (2 members, 2 stages) still finds fd to a few percent

@@ -577,15 +577,15 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
             candidates = _fill(law, box, 1024, rng, inside, latin=False)
             evaluate(candidates[int(np.argmax(process.upper(candidates,
                                                             settings.exploration)))])
-        process, best = fitted(box)
         if stage == 0 and model_error is not None:
+            process, best = fitted(box)
             spread = sample_posterior(process, box, inside, best, samples=1000,
                                       seed=int(rng.integers(2**31)))
             error = np.sqrt(np.mean([model_error(from_coordinates(law, x)) ** 2
                                      for x in error_points(best[0], spread, box)], axis=0))
-            process, best = fitted(box)
         if stage == settings.stages - 1:
             break
+        process, best = fitted(box)
         draws = sample_posterior(process, box, inside, best, samples=1000,
                                  seed=int(rng.integers(2**31)))
         zoomed = _zoomed(draws, best, box, bounds)
