@@ -321,7 +321,7 @@ def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
 
 
 def test_the_model_error_is_its_root_mean_square_over_the_posteriors_reach():
-    """Measured at the best guess and along each parameter's posterior, not at one point."""
+    """Measured at the best guess and the ends of the posterior's longest axis, not at one point."""
     observed = np.array([0.9, 0.6, 0.3])
     settings = SearchSettings(stages=2, design=3, acquisitions=2, refinements=1,
                               exploration=2.0, samples=1000, seed=0)
