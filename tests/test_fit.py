@@ -18,7 +18,9 @@ from slipwave.fit.ensemble import Ensemble, Member, Nuisances, draw_members, mes
 from slipwave.fit.features import (
     FEATURES,
     edge_threshold,
+    far_edge_moves,
     feature_vector,
+    measured_split,
     measurement_error,
     split_edge_ratios,
 )
@@ -38,7 +40,13 @@ from slipwave.fit.likelihood import (
     pooled_logliks,
     synthetic_loglik,
 )
-from slipwave.fit.procedure import band_z, dc_per_excess, fd_start, first_box
+from slipwave.fit.procedure import (
+    band_z,
+    dc_per_excess,
+    fd_start,
+    first_box,
+    probe_threshold,
+)
 from slipwave.fit.search import (
     Posterior,
     SearchSettings,
@@ -85,6 +93,26 @@ def test_edge_threshold_needs_a_gross_slip(virtual):
         result.simulation["wave"] != "gross", "partial"))
     with pytest.raises(SlipwaveError, match="no gross slip"):
         edge_threshold(quiet)
+
+
+def test_a_probe_that_leaves_no_measured_gross_slip_gives_way_to_the_measured_split(
+        virtual):
+    _, csv = virtual
+    recording = read_acquisition(csv)
+    events = measured_events(recording)
+    setup = read_test_setup(recording, CELLS)
+    cache = SolverCache()
+    probe = probe_threshold(setup, events, elements=80, cache=cache)
+    gross = far_edge_moves(events) & (events["edge_ratio"].to_numpy() >= probe)
+    assert gross.any() and not gross.all()
+    # the same slips, their far edge following less than the probe's law would have it
+    lowered = events.assign(edge_ratio=events["edge_ratio"] * 0.5 * probe
+                            / events["edge_ratio"].max())
+    lowered.attrs = dict(events.attrs)
+    threshold = probe_threshold(setup, lowered, elements=80, cache=cache)
+    assert threshold == measured_split(lowered) < 0.5 * probe
+    assert np.array_equal(far_edge_moves(lowered)
+                          & (lowered["edge_ratio"].to_numpy() >= threshold), gross)
 
 
 def test_features_classify_by_edges_and_fill_what_did_not_happen(virtual):

@@ -193,6 +193,73 @@ def split_edge_ratios(ratio: np.ndarray, far_jump: np.ndarray, gross: np.ndarray
     return float(np.sqrt(typical * below.max()))
 
 
+def far_edge_moves(events: pd.DataFrame) -> np.ndarray:
+    """Which slips move the far edge significantly (the detection's ``DG_min_jump``).
+
+    Parameters
+    ----------
+    events
+        From :func:`~slipwave.events.detect_events`; without ``DG_min_jump`` in its
+        ``attrs``, any jump counts.
+
+    Returns
+    -------
+    numpy.ndarray
+        One bool per slip.
+
+    """
+    return np.abs(events["DG_jump"].to_numpy(dtype=float)) >= events.attrs.get(
+        "DG_min_jump", 0.0)
+
+
+CLEAR_SPLIT = 2.0
+"""A measured split between gross and partial slips is clear when the widest gap of
+the slips' DG/DD ratios (sorted) is at least this factor."""
+
+
+def measured_split(events: pd.DataFrame) -> float | None:
+    """The DG/DD ratio in the widest gap of a recording's slips, where that gap is clear.
+
+    Only the slips whose far-edge jump is significant (``DG_min_jump`` of
+    ``events.attrs``) count; the threshold is the gap's geometric middle. ``None``
+    when fewer than two such slips or no gap of :data:`CLEAR_SPLIT` or more.
+
+    Parameters
+    ----------
+    events
+        From :func:`~slipwave.events.detect_events` (``edge_ratio``, ``DG_jump``).
+
+    Returns
+    -------
+    float or None
+        The ratio, or ``None``.
+
+    Examples
+    --------
+    >>> events = pd.DataFrame({"edge_ratio": [1.2, 1.16, 0.46, 0.3, 0.2],
+    ...                        "DG_jump": [0.5, 0.5, 0.1, 0.05, 0.05]})
+    >>> round(measured_split(events), 3)
+    0.73
+
+    Ratios that spread without a clear gap have no split:
+
+    >>> print(measured_split(events.assign(edge_ratio=[1.2, 0.9, 0.7, 0.5, 0.4])))
+    None
+    """
+    if events.empty:
+        return None
+    ratio = events["edge_ratio"].to_numpy(dtype=float)
+    significant = far_edge_moves(events)
+    logs = np.sort(np.log(ratio[significant & np.isfinite(ratio) & (ratio > 0)]))
+    if logs.size < 2:
+        return None
+    gaps = np.diff(logs)
+    widest = int(np.argmax(gaps))
+    if gaps[widest] < np.log(CLEAR_SPLIT):
+        return None
+    return float(np.exp(0.5 * (logs[widest] + logs[widest + 1])))
+
+
 def detected_edge_threshold(simulation: xr.Dataset, setup: TestSetup, *, min_drop: float,
                             sample_rate: float,
                             detection: DetectionSettings = DEFAULT_DETECTION) -> float:
@@ -274,8 +341,7 @@ def slip_features(events: pd.DataFrame, *, gross_edge_ratio: float, min_drop: fl
     if events.empty:
         return SlipFeatures(pd.DataFrame(columns=list(_GROSS_COLUMNS)), 0, min_drop, duration,
                             sample_rate)
-    significant = np.abs(events["DG_jump"].to_numpy(dtype=float)) >= events.attrs.get(
-        "DG_min_jump", 0.0)
+    significant = far_edge_moves(events)
     gross = significant & (events["edge_ratio"].to_numpy(dtype=float) >= gross_edge_ratio)
     first = int(np.argmin(events["t_start"].to_numpy(dtype=float)))
     return SlipFeatures(events.loc[gross, list(_GROSS_COLUMNS)].reset_index(drop=True),

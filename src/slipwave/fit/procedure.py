@@ -29,7 +29,13 @@ from slipwave.defaults import (
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings
 from slipwave.fit.ensemble import Ensemble, Nuisances, draw_members, mesh_error
-from slipwave.fit.features import FEATURES, detected_edge_threshold, measurement_error
+from slipwave.fit.features import (
+    FEATURES,
+    detected_edge_threshold,
+    far_edge_moves,
+    measured_split,
+    measurement_error,
+)
 from slipwave.fit.laws import (
     LAWS,
     PRIORS,
@@ -154,7 +160,12 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *, elements: int,
 
     What separates a gross slip's edge jumps from a partial slip's is the slab's shape
     (how the far edge follows); one simulation at fd from the largest drops and fs 0.3
-    above sets it for the whole fit.
+    above sets it for the whole fit. A law whose gross slips move the far edge less
+    than Coulomb's (slip-weakening with a small excess: DG/DD 1.2 where Coulomb's probe
+    puts the threshold at 1.6) would then show no gross slip at all in a test sheared
+    until it slides: where no measured slip reaches the probe's threshold, the
+    measured ratios' own clear split is taken
+    (:func:`~slipwave.fit.features.measured_split`), if they have one.
 
     Parameters
     ----------
@@ -164,15 +175,21 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *, elements: int,
     Returns
     -------
     float
-        :func:`~slipwave.fit.features.detected_edge_threshold` of that run.
+        :func:`~slipwave.fit.features.detected_edge_threshold` of that run, or the
+        measured split.
 
     """
     fd = fd_start(measured)
     simulation = setup.simulate(Coulomb(fs=fd + 0.3, fd=fd), elements, cache=cache)
-    return detected_edge_threshold(simulation, setup,
-                                   min_drop=float(measured.attrs.get("min_drop", 0.0)),
-                                   sample_rate=float(measured.attrs["sample_rate"]),
-                                   detection=detection)
+    threshold = detected_edge_threshold(simulation, setup,
+                                        min_drop=float(measured.attrs.get("min_drop", 0.0)),
+                                        sample_rate=float(measured.attrs["sample_rate"]),
+                                        detection=detection)
+    reaching = measured["edge_ratio"].to_numpy(dtype=float) >= threshold
+    if (far_edge_moves(measured) & reaching).any():
+        return threshold
+    split = measured_split(measured)
+    return threshold if split is None else split
 
 
 def fd_start(measured: pd.DataFrame) -> float:
