@@ -35,6 +35,7 @@ from slipwave.fit.laws import (
     to_coordinates,
 )
 from slipwave.fit.likelihood import (
+    ModelError,
     SyntheticLikelihood,
     pooled_covariance,
     pooled_logliks,
@@ -318,10 +319,14 @@ def test_the_mesh_error_is_the_meshes_difference_beyond_the_members_scatter():
     offset = np.array([0.0, 0.05, -0.2])
     coarse = _Meshed(members, np.zeros(3), 0.01, seed=1)
     fine = _Meshed(members, offset, 0.01, seed=2)
-    error = mesh_error(coarse, fine, "coulomb", {"fs": 0.9, "fd": 0.6})
+    shift, error = mesh_error(coarse, fine, "coulomb", {"fs": 0.9, "fd": 0.6})
     # a feature the meshes agree on has (almost) none; the others their offset
-    assert error[0] < 0.005
+    assert error[0] < 0.005 and abs(shift[0]) < 0.005
     assert error[1:] == pytest.approx(np.abs(offset[1:]), abs=0.005)
+    assert shift[1:] == pytest.approx(offset[1:], abs=0.005)  # signed: fine less coarse
+    assert np.all(np.abs(shift) <= np.abs(fine.features("coulomb", {"fs": 0.9})
+                                           - coarse.features("coulomb", {"fs": 0.9})
+                                           ).mean(axis=0) + 1e-12)  # shrunk, never grown
     with pytest.raises(ValueError, match="same members"):
         mesh_error(coarse, _Meshed(members[:3], offset, 0.01, seed=2), "coulomb",
                    {"fs": 0.9, "fd": 0.6})
@@ -338,7 +343,8 @@ def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
     for carried in (None, np.array([0.0, 0.0, 0.05])):
         posterior = search_law("coulomb", _gaussian_simulator(np.random.default_rng(6), 0.005),
                                likelihood, box, settings,
-                               model_error=None if carried is None else lambda p, e=carried: e)
+                               model_error=None if carried is None else
+                               lambda p, e=carried: ModelError(np.zeros(3), e))
         runs["with" if carried is not None else "without"] = posterior
     fs_without = runs["without"].summary()["fs"]
     fs_with = runs["with"].summary()["fs"]
@@ -346,6 +352,33 @@ def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
     assert fs_with["low"] <= 0.9 <= fs_with["high"]
     assert runs["with"].model_error.tolist() == [0.0, 0.0, 0.05]
     assert runs["without"].model_error is None
+
+
+def test_a_model_shift_carries_the_features_to_the_finer_mesh():
+    """fs read by a feature the coarse model biases by 0.05: the shift puts it back."""
+    observed = np.array([0.6, 0.3])  # fd and fs - fd, made by the fine model (0.9, 0.6)
+    settings = SearchSettings(stages=2, design=3, acquisitions=2, refinements=1,
+                              exploration=2.0, samples=1000, seed=0)
+    box = np.array([[0.6, 1.2], [0.45, 0.75]])
+    likelihood = SyntheticLikelihood(observed, np.full(2, 1e-3))
+    rng = np.random.default_rng(6)
+
+    def coarse(params):
+        mean = np.array([params["fd"], params["fs"] - params["fd"] + 0.05])
+        return mean + rng.normal(0.0, 0.005, (4, 2))
+
+    errors = {"none": None, "size": ModelError(np.zeros(2), np.array([0.0, 0.05])),
+              "shift": ModelError(np.array([0.0, -0.05]), np.array([0.0, 0.05]))}
+    fits = {name: search_law("coulomb", coarse, likelihood, box, settings,
+                             model_error=None if error is None else lambda p, e=error: e)
+            for name, error in errors.items()}
+    fs = {name: fit.summary()["fs"] for name, fit in fits.items()}
+    off = {name: abs(entry["value"] - 0.9) for name, entry in fs.items()}
+    half = {name: 0.5 * (entry["high"] - entry["low"]) for name, entry in fs.items()}
+    assert off["none"] > half["none"]  # pulled off by the bias
+    assert off["size"] > 0.3 * half["size"]  # covered, off-centre: only widened
+    assert off["shift"] < min(0.5 * half["shift"], 0.5 * off["size"])  # centred again
+    assert fits["shift"].model_shift(np.array([[0.9, 0.6]]))[0].tolist() == [0.0, -0.05]
 
 
 def test_the_model_error_is_its_root_mean_square_over_the_posteriors_reach():
@@ -358,7 +391,7 @@ def test_the_model_error_is_its_root_mean_square_over_the_posteriors_reach():
 
     def model_error(params):
         measured_at.append((params["fs"], params["fd"]))
-        return np.array([0.0, 0.0, abs(params["fs"] - 0.9)])
+        return ModelError(np.zeros(3), np.array([0.0, 0.0, abs(params["fs"] - 0.9)]))
 
     posterior = search_law("coulomb", _gaussian_simulator(np.random.default_rng(6), 0.005),
                            likelihood, np.array([[0.6, 1.2], [0.45, 0.75]]), settings,

@@ -41,6 +41,7 @@ from slipwave.fit.features import (
     slip_features,
 )
 from slipwave.fit.laws import law_of
+from slipwave.fit.likelihood import ModelError
 from slipwave.setup import TestSetup
 from slipwave.solver import SolverCache
 
@@ -275,17 +276,20 @@ class Ensemble:
 
 
 def mesh_error(coarse: Ensemble, fine: Ensemble, law: str, params: Mapping[str, float]
-               ) -> np.ndarray:
+               ) -> ModelError:
     """Each feature's error from the mesh at a guess: the fit's mesh against a finer one.
 
     The numerical uncertainty of a validation (ASME V&V 20-2009; Roache 1998): what the
     fit's mesh computes differs from what a finer one does, and a Coulomb law with
     fs > fd does not converge at all (docs: "Mesh convergence"), so a measurement made by
     a finer model or by a real slab differs from the fit's simulations by more than the
-    ensemble's scatter. Both ensembles run the same members; the mean of the members'
-    paired differences is the error, its own sampling scatter taken out (the square of
-    the mean less its variance, floored at 0): a feature on which the meshes agree
-    within the members' scatter has no error from the mesh.
+    ensemble's scatter. Both ensembles run the same members, and their paired
+    differences' mean d, with its own sampling variance v (the members' scatter over
+    their number), gives both parts of the error. Its size is sqrt(max(d^2 - v, 0)):
+    a feature on which the meshes agree within the members' scatter has no error from
+    the mesh. Its shift, which carries the fit's features to the finer mesh, is d shrunk
+    by the same share, d max(1 - v / d^2, 0) (James and Stein's shrinkage): a
+    difference within the scatter moves nothing.
 
     Parameters
     ----------
@@ -298,9 +302,9 @@ def mesh_error(coarse: Ensemble, fine: Ensemble, law: str, params: Mapping[str, 
 
     Returns
     -------
-    numpy.ndarray
-        One standard error per feature (:data:`~slipwave.fit.features.FEATURES`); 0
-        where fewer than two members ran on both meshes.
+    ModelError
+        Per feature (:data:`~slipwave.fit.features.FEATURES`); zero where fewer than two
+        members ran on both meshes.
 
     Raises
     ------
@@ -313,7 +317,9 @@ def mesh_error(coarse: Ensemble, fine: Ensemble, law: str, params: Mapping[str, 
     differences = fine.features(law, params) - coarse.features(law, params)
     differences = differences[np.all(np.isfinite(differences), axis=1)]
     if differences.shape[0] < 2:
-        return np.zeros(len(FEATURES))
+        return ModelError(np.zeros(len(FEATURES)), np.zeros(len(FEATURES)))
     mean = differences.mean(axis=0)
     scatter = differences.var(axis=0, ddof=1) / differences.shape[0]
-    return np.sqrt(np.maximum(mean**2 - scatter, 0.0))
+    beyond = np.maximum(mean**2 - scatter, 0.0)
+    shift = np.divide(beyond, mean, out=np.zeros_like(mean), where=mean != 0.0)
+    return ModelError(shift, np.sqrt(beyond))

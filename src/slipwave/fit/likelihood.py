@@ -22,9 +22,29 @@ True
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy.stats import multivariate_normal
 from sklearn.covariance import ledoit_wolf
+
+
+class ModelError(NamedTuple):
+    """The model's own error of each feature at a guess (the mesh's: twice the mesh less it).
+
+    Attributes
+    ----------
+    shift
+        What the model's features lack on average: added to every member's, so that
+        they stand for the finer model's.
+    error
+        How far the model may still be off, a standard error added to the
+        measurement's in quadrature.
+
+    """
+
+    shift: np.ndarray
+    error: np.ndarray
 
 
 def shrunk_covariance(members: np.ndarray) -> np.ndarray:

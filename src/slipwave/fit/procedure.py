@@ -44,6 +44,7 @@ from slipwave.fit.laws import (
     ZONE_ELEMENTS,
     law_of,
     prior_bounds,
+    to_coordinates,
 )
 from slipwave.fit.likelihood import SyntheticLikelihood
 from slipwave.fit.search import Posterior, SearchSettings, search_law
@@ -290,8 +291,9 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
     """The chosen law's posterior predictive against the measured features.
 
     ``members`` simulations, each with parameters drawn from the posterior and its own
-    nuisances (:func:`~slipwave.fit.ensemble.draw_members`); a feature agrees when the
-    measurement lies within z standard deviations of their mean, the spread of the
+    nuisances (:func:`~slipwave.fit.ensemble.draw_members`), carried to the finer mesh as
+    the likelihood carried them (the posterior's ``model_shift``); a feature agrees when
+    the measurement lies within z standard deviations of their mean, the spread of the
     simulations, the measurement's own error and the mesh's (the posterior's
     ``model_error``) in quadrature (ASME V&V 20's validation uncertainty), z Bonferroni's for
     :data:`FAMILY_LEVEL` over all the features: a law that is right then agrees on every
@@ -324,9 +326,12 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
                               strict=True):
         law_params = dict(zip(LAWS[posterior.law], (float(v) for v in params), strict=True))
         try:
-            rows.append(ensemble.member_vector(posterior.law, law_params, member))
+            row = ensemble.member_vector(posterior.law, law_params, member)
         except SlipwaveError:
             continue
+        if posterior.model_shift is not None:
+            row = row + posterior.model_shift(to_coordinates(posterior.law, law_params))[0]
+        rows.append(row)
     simulated = np.array(rows)
     z = band_z(len(FEATURES))
     mean = simulated.mean(axis=0)

@@ -32,6 +32,7 @@ from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
 from slipwave.errors import SlipwaveError
 from slipwave.fit.laws import LAWS, from_coordinates, prior_bounds, prior_mask
+from slipwave.fit.likelihood import ModelError
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,9 @@ class Posterior:
     model_error
         The features' error from the mesh the likelihood carried
         (:func:`~slipwave.fit.ensemble.mesh_error`), or None.
+    model_shift
+        What the likelihood added to the features to carry them to the finer mesh
+        (:class:`ModelShift`), or None.
 
     """
 
@@ -101,6 +105,7 @@ class Posterior:
     box: np.ndarray
     seconds: float = 0.0
     model_error: np.ndarray | None = None
+    model_shift: ModelShift | None = field(default=None, repr=False)
     surrogate: Surrogate | None = field(default=None, repr=False)
 
     @property
@@ -423,6 +428,17 @@ ERROR_QUANTILES = (0.05, 0.95)
 best guess: these quantiles of the first stage's surrogate posterior."""
 
 
+def _longest_axis(spread: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The draws' centre and first principal axis in the box's unit cube.
+
+    The axis has no sign of its own (an SVD's): its largest component is made positive.
+    """
+    unit = scaled(spread, box)
+    centre = unit.mean(axis=0)
+    axis = np.linalg.svd(unit - centre, full_matrices=False)[2][0]
+    return centre, axis if axis[np.argmax(np.abs(axis))] > 0 else -axis
+
+
 def error_points(best: np.ndarray, spread: np.ndarray, box: np.ndarray) -> np.ndarray:
     """Where to measure the model's own error: the best guess and the posterior's reach.
 
@@ -457,18 +473,96 @@ def error_points(best: np.ndarray, spread: np.ndarray, box: np.ndarray) -> np.nd
     >>> error_points(np.array([0.5, 1.5]), spread, box).round(6).tolist()
     [[0.5, 1.5], [0.05, 1.95], [0.95, 1.05]]
     """
-    unit = scaled(spread, box)
-    centred = unit - unit.mean(axis=0)
-    axis = np.linalg.svd(centred, full_matrices=False)[2][0]
-    along = centred @ axis
-    if axis[np.argmax(np.abs(axis))] < 0:  # an SVD axis has no sign: its largest part > 0
-        along = -along
+    centre, axis = _longest_axis(spread, box)
+    along = (scaled(spread, box) - centre) @ axis
     chosen = [best]
     for level in np.quantile(along, ERROR_QUANTILES):
         point = spread[int(np.argmin(np.abs(along - level)))]
         if not any(np.array_equal(point, kept) for kept in chosen):
             chosen.append(point)
     return np.array(chosen)
+
+
+@dataclass(frozen=True)
+class ModelShift:
+    """The model's mean error of the features along the posterior's longest axis.
+
+    Measured at a few points (:func:`error_points`), linear between their places on
+    the axis (:func:`_longest_axis` of the draws they were chosen from), the nearest
+    one's beyond them: on a ridge the mesh's error changes along it, and across it the
+    posterior is narrow.
+
+    Attributes
+    ----------
+    box
+        The search box the axis lies in.
+    centre, axis
+        The draws' centre and longest axis, in the box's unit cube.
+    along
+        The points' places on the axis, increasing.
+    shifts
+        The shift measured at each point, shape (points, features).
+
+    Examples
+    --------
+    >>> spread = np.column_stack([np.linspace(0.0, 1.0, 101), np.zeros(101)])
+    >>> box = np.array([[0.0, 1.0], [-1.0, 1.0]])
+    >>> points = np.array([[0.5, 0.0], [0.0, 0.0], [1.0, 0.0]])
+    >>> shift = ModelShift.measured(points, np.array([[0.1], [0.0], [0.2]]), spread, box)
+    >>> shift(np.array([[0.25, 0.0], [0.75, 0.5], [2.0, 0.0]])).round(3).ravel().tolist()
+    [0.05, 0.15, 0.2]
+    """
+
+    box: np.ndarray
+    centre: np.ndarray
+    axis: np.ndarray
+    along: np.ndarray
+    shifts: np.ndarray
+
+    @classmethod
+    def measured(cls, points: np.ndarray, shifts: np.ndarray, spread: np.ndarray,
+                 box: np.ndarray) -> ModelShift:
+        """The shift from its values at points chosen along the draws' longest axis.
+
+        Parameters
+        ----------
+        points
+            Where it was measured, shape (points, parameters), the search's coordinates.
+        shifts
+            What it measured there, shape (points, features).
+        spread
+            The draws the points were chosen along (:func:`error_points`).
+        box
+            The search box.
+
+        Returns
+        -------
+        ModelShift
+            Ready to evaluate anywhere.
+
+        """
+        centre, axis = _longest_axis(spread, box)
+        along = (scaled(points, box) - centre) @ axis
+        order = np.argsort(along, kind="stable")
+        return cls(box, centre, axis, along[order], np.asarray(shifts)[order])
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        """The shift at points.
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters), the search's coordinates.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (n, features).
+
+        """
+        along = (scaled(np.atleast_2d(points), self.box) - self.centre) @ self.axis
+        return np.column_stack([np.interp(along, self.along, self.shifts[:, k])
+                                for k in range(self.shifts.shape[1])])
 
 
 ZOOM = 1.0
@@ -487,7 +581,7 @@ previous stage's."""
 def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
                loglik: Callable[[list[np.ndarray], np.ndarray, np.ndarray | None], np.ndarray],
                box: np.ndarray, settings: SearchSettings, *, dc_per_excess: float = 0.0,
-               model_error: Callable[[Mapping[str, float]], np.ndarray] | None = None
+               model_error: Callable[[Mapping[str, float]], ModelError] | None = None
                ) -> Posterior:
     """A law's posterior on a test, by a Gaussian-process surrogate of its likelihood.
 
@@ -498,8 +592,10 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     the surrogate refitted after each. A posterior a fraction of a percent wide in a
     box the prior's width could not be resolved by one stationary surrogate. With
     ``model_error``, the model's own error of the features is measured after the first
-    stage (root mean square over :func:`error_points`) and carried by the likelihood
-    from then on (every log-likelihood is recomputed from the runs).
+    stage at :func:`error_points` and carried by the likelihood from then on (every
+    log-likelihood is recomputed from the runs): its shift, interpolated along the
+    posterior's longest axis (:class:`ModelShift`), added to every member's features,
+    and its size (root mean square over the points) to the measurement's error.
 
     Parameters
     ----------
@@ -544,10 +640,18 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     points: list[np.ndarray] = []
     runs: list[np.ndarray] = []
     error: np.ndarray | None = None
+    shift: ModelShift | None = None
 
     def evaluate(x: np.ndarray) -> None:
         points.append(x)
         runs.append(simulate(from_coordinates(law, x)))
+
+    def logliks(pool: np.ndarray) -> np.ndarray:
+        # every run scored with the model's error as measured so far
+        if shift is None:
+            return loglik(runs, pool, error)
+        moved = shift(np.array(points))
+        return loglik([run + moved[k] for k, run in enumerate(runs)], pool, error)
 
     def near_box(box: np.ndarray) -> np.ndarray:
         x = np.array(points)
@@ -559,7 +663,7 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
         # the surrogate over the points near the box, and the best of them
         x = np.array(points)
         near = near_box(box)
-        y = loglik(runs, near, error)
+        y = logliks(near)
         near &= np.isfinite(y)
         if near.sum() < 2:
             raise SlipwaveError(f"the solver followed fewer than two {law} laws of "
@@ -581,8 +685,11 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
             process, best = fitted(box)
             spread = sample_posterior(process, box, inside, best, samples=1000,
                                       seed=int(rng.integers(2**31)))
-            error = np.sqrt(np.mean([model_error(from_coordinates(law, x)) ** 2
-                                     for x in error_points(best[0], spread, box)], axis=0))
+            at = error_points(best[0], spread, box)
+            measured = [model_error(from_coordinates(law, x)) for x in at]
+            error = np.sqrt(np.mean([m.error**2 for m in measured], axis=0))
+            shift = ModelShift.measured(at, np.array([m.shift for m in measured]), spread,
+                                        box)
         if stage == settings.stages - 1:
             break
         process, best = fitted(box)
@@ -605,6 +712,6 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
                                seed=int(rng.integers(2**31)))
     evidence = log_evidence(process, box, law, inside, samples, int(rng.integers(2**31)))
     natural = np.array([list(from_coordinates(law, row).values()) for row in samples])
-    values = loglik(runs, near_box(box), error)
+    values = logliks(near_box(box))
     return Posterior(law, natural, evidence, np.array(points), values, box,
-                     clock.perf_counter() - began, error, process)
+                     clock.perf_counter() - began, error, shift, process)
