@@ -75,8 +75,10 @@ SLAB_ELEMENTS = 160
 """Elements along the contact of a slab simulated alone (``Slab``, ``slipwave simulate``
 without a fit)."""
 BENCH_ELEMENTS = 160
-"""Elements along the contact of the virtual bench's tests: finer than the fit's, so
-that no benchmark fits a test with the mesh that made it."""
+"""Elements along the contact of the virtual bench's tests: twice the fit's, the mesh
+the fit carries its features to (``slipwave.fit.ensemble.mesh_error``'s shift), so a fit
+of a test made here is in part a fit with the model that made it; the calibration
+benchmark makes its tests at four times the fit's."""
 
 # The behaviour map (slipwave.map; config section ``map``).
 MAP_ELEMENTS: int = _setting("map", "elements")
