@@ -212,6 +212,29 @@ def far_edge_moves(events: pd.DataFrame) -> np.ndarray:
         "DG_min_jump", 0.0)
 
 
+def gross_by_edges(events: pd.DataFrame, gross_edge_ratio: float) -> np.ndarray:
+    """Which slips are gross, told by their edges.
+
+    The far edge moves (:func:`far_edge_moves`) and DG/DD reaches ``gross_edge_ratio``
+    (as :func:`~slipwave.events.classify_events` decides).
+
+    Parameters
+    ----------
+    events
+        From :func:`~slipwave.events.detect_events`.
+    gross_edge_ratio
+        The test's threshold.
+
+    Returns
+    -------
+    numpy.ndarray
+        One bool per slip.
+
+    """
+    return far_edge_moves(events) & (
+        events["edge_ratio"].to_numpy(dtype=float) >= gross_edge_ratio)
+
+
 CLEAR_SPLIT = 2.0
 """A measured split between gross and partial slips is clear when the widest gap of
 the slips' DG/DD ratios (sorted) is at least this factor."""
@@ -341,8 +364,7 @@ def slip_features(events: pd.DataFrame, *, gross_edge_ratio: float, min_drop: fl
     if events.empty:
         return SlipFeatures(pd.DataFrame(columns=list(_GROSS_COLUMNS)), 0, min_drop, duration,
                             sample_rate)
-    significant = far_edge_moves(events)
-    gross = significant & (events["edge_ratio"].to_numpy(dtype=float) >= gross_edge_ratio)
+    gross = gross_by_edges(events, gross_edge_ratio)
     first = int(np.argmin(events["t_start"].to_numpy(dtype=float)))
     return SlipFeatures(events.loc[gross, list(_GROSS_COLUMNS)].reset_index(drop=True),
                         int((~gross).sum()), min_drop, duration, sample_rate,

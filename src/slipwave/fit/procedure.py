@@ -32,7 +32,7 @@ from slipwave.fit.ensemble import Ensemble, Nuisances, draw_members, mesh_error
 from slipwave.fit.features import (
     FEATURES,
     detected_edge_threshold,
-    far_edge_moves,
+    gross_by_edges,
     measured_split,
     measurement_error,
 )
@@ -186,8 +186,7 @@ def probe_threshold(setup: TestSetup, measured: pd.DataFrame, *, elements: int,
                                         min_drop=float(measured.attrs.get("min_drop", 0.0)),
                                         sample_rate=float(measured.attrs["sample_rate"]),
                                         detection=detection)
-    reaching = measured["edge_ratio"].to_numpy(dtype=float) >= threshold
-    if (far_edge_moves(measured) & reaching).any():
+    if gross_by_edges(measured, threshold).any():
         return threshold
     split = measured_split(measured)
     return threshold if split is None else split
