@@ -97,7 +97,8 @@ def valid_fit(**changes: object) -> dict:
            "measured": {"slips": 3, "gross_slips": 2, "min_drop_n": 0.3},
            "edge_threshold": 0.9, "features": {"first_ratio": 0.55},
            "laws": {"coulomb": law}, "chosen": "coulomb",
-           "parameters": {"fs": 0.8, "fd": 0.6}, "settings": {"members": 4},
+           "parameters": {"fs": 0.8, "fd": 0.6}, "parameters_note": None,
+           "settings": {"members": 4},
            "predictive": {"first_ratio": {"measured": 0.55, "simulated": 0.56, "spread": 0.01,
                                           "z": -1.0, "agrees": True}}}
     fit.update(changes)

@@ -47,6 +47,7 @@ from slipwave.fit.procedure import (
     fd_start,
     first_box,
     probe_threshold,
+    simulated_law,
 )
 from slipwave.fit.search import (
     Posterior,
@@ -504,3 +505,34 @@ def test_fits_table_reads_every_law(tmp_path):
     (tmp_path / "f.json").write_text(json.dumps(valid_fit()))
     assert main(["fits", str(tmp_path / "f.json"), "-o", str(tmp_path / "fits.csv")]) == 0
     assert pd.read_csv(tmp_path / "fits.csv")["law"].tolist() == ["coulomb"]
+
+
+class _Solver:
+    """A test's setup whose solver follows Coulomb's laws with fs up to ``followed``."""
+
+    def __init__(self, followed: float) -> None:
+        self.followed = followed
+        self.tried: list[float] = []
+
+    def simulate(self, friction: object, elements: int, cache: object = None) -> None:
+        self.tried.append(friction.fs)  # type: ignore[attr-defined]
+        if friction.fs > self.followed:  # type: ignore[attr-defined]
+            raise SlipwaveError("test 'x': the solver failed at step 436: the active set cycles")
+
+
+def test_simulated_law_is_the_medians_or_the_nearest_draw_the_solver_follows() -> None:
+    rng = np.random.default_rng(3)
+    samples = np.column_stack([rng.normal(0.9, 0.02, 500), rng.normal(0.6, 0.01, 500)])
+    posterior = Posterior("coulomb", samples, 0.0, samples[:2], np.zeros(2),
+                          np.array([[0.8, 1.0], [0.5, 0.7]]))
+    median = float(np.median(samples[:, 0]))
+    followed, note = simulated_law(_Solver(2.0), posterior, 80)  # type: ignore[arg-type]
+    assert note is None and followed["fs"] == round(median, 6)
+    # the medians fail: the draw nearest them that the solver follows, said so
+    solver = _Solver(median - 0.01)
+    followed, note = simulated_law(solver, posterior, 80)  # type: ignore[arg-type]
+    assert median - 0.04 < followed["fs"] <= median - 0.01
+    assert note is not None and "step 436" in note and "nearest" in note
+    assert solver.tried[0] == round(median, 6) and len(solver.tried) > 2
+    with pytest.raises(SlipwaveError, match="the coulomb law's posterior medians nor 20 draws"):
+        simulated_law(_Solver(0.0), posterior, 80)  # type: ignore[arg-type]

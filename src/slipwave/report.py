@@ -367,7 +367,8 @@ def pairing_summary(
         ``ratios``, ``space_time``, ``frames``, ``map``), ``placement``, ``missing``
         (what could not be shown, in words) and ``scatter_step`` (how far apart the
         coefficients of the comparison's neighbouring simulations are: the fit's load
-        calibration).
+        calibration), ``simulated`` and ``simulated_note`` (the law the simulation takes,
+        and why it is not the posterior medians, or None).
 
     """
     missing: list[str] = []
@@ -378,7 +379,8 @@ def pairing_summary(
                                   "map")),
         "placement": placement, "missing": missing, "edge_reference": None,
         "edge_threshold": None, "fit_edge_threshold": None, "elements": None,
-        "frame_labels": [], "scatter_step": SCATTER_STEP}
+        "frame_labels": [], "scatter_step": SCATTER_STEP, "simulated": None,
+        "simulated_note": None}
     if simulated is not None and "gross_edge_ratio" in simulated.attrs:
         # what detection told the test's events by, read off the simulation's slips
         summary["edge_threshold"] = float(simulated.attrs["gross_edge_ratio"])
@@ -406,6 +408,8 @@ def pairing_summary(
                 "log_bayes_factor": entry["log_bayes_factor"], "guesses": entry["guesses"],
                 "simulations": entry["simulations"]})
         summary["mesh_check"] = mesh_check_rows(fit)
+        summary["simulated"] = fit["parameters"]
+        summary["simulated_note"] = fit.get("parameters_note")
         summary.update(predictive_rows(fit))
     if comparison is None:
         missing.append("no comparison: the test was not compared with a simulation")

@@ -509,8 +509,10 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
         ``fit.json``'s content: ``test_id``, ``setup`` (every value with its source),
         ``elements``, ``detection``, ``load_calibration``, ``measured`` (slip counts),
         ``edge_threshold``, ``features`` (the measured ones), ``laws`` (each
-        :func:`law_entry`), ``chosen`` (the highest evidence), ``parameters`` (its
-        posterior medians), ``settings`` (the ensemble's and the search's),
+        :func:`law_entry`), ``chosen`` (the highest evidence), ``parameters`` (the law
+        the test's simulation takes: its posterior medians, or where the solver does not
+        follow them the draw :func:`simulated_law` finds), ``parameters_note`` (None, or
+        why they are not the medians), ``settings`` (the ensemble's and the search's),
         ``predictive`` (:func:`predictive_check`) and
         ``mesh_check`` (:func:`mesh_check`, or null).
 
@@ -527,7 +529,7 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
     predictive = predictive_check(ensemble, chosen, settings.predictive_members,
                                   settings.search.seed, fitted.error)
     finer = mesh_check(fitted, chosen, settings) if settings.mesh_check else None
-    summary = chosen.summary()
+    simulated, simulated_note = simulated_law(setup, chosen, settings.elements, cache)
     return {"test_id": setup.test_id, "setup": setup.to_dict(),
             "elements": settings.elements, "detection": detection.to_dict(),
             "load_calibration": settings.nuisances.load_calibration,
@@ -541,7 +543,8 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
                                     DECISIVE)
                      for law, posterior in fitted.posteriors.items()},
             "chosen": chosen.law,
-            "parameters": {name: round(entry["value"], 6) for name, entry in summary.items()},
+            "parameters": simulated,
+            "parameters_note": simulated_note,
             "settings": {"members": settings.members,
                          "predictive_members": settings.predictive_members,
                          "stiffness_error": settings.nuisances.stiffness_error,
@@ -554,6 +557,76 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
                              "exploration", "samples", "seed")}},
             "predictive": predictive,
             "mesh_check": finer}
+
+
+FOLLOWED_DRAWS = 20
+"""Posterior draws that :func:`simulated_law` tries when the solver does not follow the
+medians: at evenly spaced ranks of their distance to them, nearest first."""
+
+
+def simulated_law(setup: TestSetup, posterior: Posterior, elements: int,
+                  cache: SolverCache | None = None) -> tuple[dict[str, float], str | None]:
+    """The parameters the test's simulation takes: the medians, or a draw the solver follows.
+
+    The medians of a law's parameters, taken one by one, are a law the solver may not
+    follow over the whole test (a high fs on a tall slab can leave a gross slip with no
+    quasi-static equilibrium: the active set cycles where the contact lands back on the
+    flat), even when most draws are followed. The test's simulation then takes the
+    nearest to the medians (in the draws' standard deviations) of
+    :data:`FOLLOWED_DRAWS` draws that the solver follows on the test's setup, and says
+    so.
+
+    Parameters
+    ----------
+    setup
+        The test's.
+    posterior
+        The chosen law's.
+    elements
+        The mesh of the test's simulation (the fit's).
+    cache
+        The solver's cache.
+
+    Returns
+    -------
+    tuple
+        The parameters (name -> value), and None for the medians or else a sentence
+        saying which law is simulated and why.
+
+    Raises
+    ------
+    SlipwaveError
+        If the solver follows neither the medians nor any of the
+        :data:`FOLLOWED_DRAWS` draws.
+
+    """
+    summary = posterior.summary()
+    medians = np.array([summary[name]["value"] for name in posterior.names])
+    scale = posterior.samples.std(axis=0)
+    scale[scale == 0.0] = 1.0
+    distance = np.sum(((posterior.samples - medians) / scale) ** 2, axis=1)
+    # a ladder of draws from the nearest outwards: where the solver fails, it fails
+    # over a region, not at a point
+    ladder = np.argsort(distance)[np.linspace(0, distance.size - 1, FOLLOWED_DRAWS).astype(int)]
+    nearest = posterior.samples[ladder]
+    failure = ""
+    for k, values in enumerate([medians, *nearest]):
+        params = {name: round(float(value), 6)
+                  for name, value in zip(posterior.names, values, strict=True)}
+        try:
+            setup.simulate(law_of(posterior.law, params), elements, cache=cache)
+        except SlipwaveError as err:
+            # the solver's own words (where and why), without the setup's advice
+            failure = failure or str(err.__cause__ or err)
+            continue
+        if k == 0:
+            return params, None
+        return params, (f"The solver does not follow the posterior medians over the whole "
+                        f"test (it stops at {failure}); the test is simulated with the "
+                        f"posterior draw nearest them that it follows (draw {k} of "
+                        f"{FOLLOWED_DRAWS}, counted from the nearest outwards).")
+    raise SlipwaveError(f"the solver follows neither the {posterior.law} law's posterior "
+                        f"medians nor {FOLLOWED_DRAWS} draws around them: {failure}")
 
 
 def mesh_check(fitted: TestFit, posterior: Posterior, settings: FitSettings
