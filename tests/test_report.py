@@ -112,6 +112,11 @@ def built(tmp_path_factory):
     write_test_page(recording, pages["full"], events, None, pairing, pdf=folder / "v.pdf",
                     workers=2)
     pages["serial"] = write_test_page(recording, folder / "serial.html", events, None, pairing)
+    # a law simulated at other parameters than the medians (no figures: the words only)
+    noted = {**pairing, "figures": dict.fromkeys(pairing["figures"]),
+             "simulated": {"fs": 0.8123, "fd": 0.6012},
+             "simulated_note": "The solver does not follow the posterior medians here."}
+    pages["noted"] = write_test_page(recording, folder / "noted.html", events, None, noted)
     # partly missing: no simulation at all; a T-only recording
     pages["measured"] = write_test_page(recording, folder / "measured.html", events,
                                         pdf=folder / "measured.pdf")
@@ -164,6 +169,14 @@ def test_figures_drawn_on_two_processes_are_those_drawn_on_one(built):
     full = pages["full"].read_text()
     assert full == pages["serial"].read_text()
     assert full.count("data:image/png;base64,") >= 5
+
+
+def test_page_says_which_law_is_simulated_when_not_the_medians(built):
+    pages, *_ = built
+    assert "The law simulated." not in pages["full"].read_text()  # the medians
+    noted = pages["noted"].read_text()
+    assert ("<strong>The law simulated.</strong> The solver does not follow the posterior "
+            "medians here. Its parameters: fs 0.8123, fd 0.6012.") in noted
 
 
 def test_partial_reports_say_what_is_missing(built):
