@@ -607,10 +607,10 @@ def simulated_law(setup: TestSetup, posterior: Posterior, elements: int,
     distance = np.sum(((posterior.samples - medians) / scale) ** 2, axis=1)
     # a ladder of draws from the nearest outwards: where the solver fails, it fails
     # over a region, not at a point
-    ladder = np.argsort(distance)[np.linspace(0, distance.size - 1, FOLLOWED_DRAWS).astype(int)]
-    nearest = posterior.samples[ladder]
+    ranks = np.linspace(0, distance.size - 1, FOLLOWED_DRAWS).astype(int)
+    ladder = posterior.samples[np.argsort(distance)[ranks]]
     failure = ""
-    for k, values in enumerate([medians, *nearest]):
+    for k, values in enumerate([medians, *ladder]):
         params = {name: round(float(value), 6)
                   for name, value in zip(posterior.names, values, strict=True)}
         try:
