@@ -31,7 +31,8 @@ CELLS = {"test_id": "v", "youngs_modulus_mpa": "7", "poisson_ratio": "0.48",
 
 @pytest.fixture(scope="module")
 def test_and_replay():
-    spec = BenchTest("v", elements=24, duration=90.0, video="none", fs=0.9, fd=0.6,
+    # 110 s: two gross slips, so that their recurrence is measured and compared
+    spec = BenchTest("v", elements=24, duration=110.0, video="none", fs=0.9, fd=0.6,
                      fs_final=None)
     result = simulate_test(spec, seed=3)
     setup = read_test_setup(result.recording, CELLS)

@@ -234,7 +234,6 @@ class _Run:
     gross_slips: int = 0
     frictionless: bool = False
     jammed: bool = False
-    r_prev: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.tributary = self.slab.tributary_length
@@ -297,31 +296,6 @@ class _Run:
         self.s_prev = relative
         self.guess = increment.state
         self.guess_sign = increment.sign
-        self.r_prev = increment.r
-
-    def onset_fraction(self, increment: Increment) -> float:
-        """Where in ``increment`` its wave began: 0 at its start, 1 at its end.
-
-        Before the wave the increment's response is the stuck one, linear along the
-        increment; the wave began where the first stuck node's |q| reached fs p on
-        that line. 1 when the increment has no wave or the line cannot tell.
-        """
-        if increment.u_before is None or self.r_prev is None or self.guess is None:
-            return 1.0
-        fs = self.friction.static_after(self.gross_slips)
-        start = self.r_prev
-        peak = (self.body.K @ increment.u_before if increment.r_before is None
-                else increment.r_before)
-        q0, p0 = start[self.body.ix], start[self.body.iy]
-        q1, p1 = peak[self.body.ix], peak[self.body.iy]
-        sign = np.where(q1 < 0, -1.0, 1.0)
-        over = (self.guess == STICK) & (p1 > 0) & (np.abs(q1) > fs * p1)
-        rate = sign * (q1 - q0) - fs * (p1 - p0)
-        usable = over & (rate > 0)
-        if not usable.any():
-            return 1.0
-        reach = (fs * p0[usable] - sign[usable] * q0[usable]) / rate[usable]
-        return float(np.clip(reach.min(), 0.0, 1.0))
 
     def record(
         self,
@@ -584,67 +558,19 @@ def _drive_through_machine(run: _Run, path: LoadPath, hold: Any) -> None:
     start = run.steps[-1]["T"] / run.slab.width  # the actuator starts where T is
     steps = int(np.ceil(path.max_travel / path.travel_step - 1e-9))
     previous = hold(T=start, machine=machine)
-    previous_actuator = 0.0
     for k in range(1, steps + 1):
         if len(run.steps) >= path.max_steps:
             break
         actuator = min(k * path.travel_step, path.max_travel)
         control = hold(T=start + machine * actuator, machine=machine)
         try:
-            increment = run._attempt(control)
+            run.record(run._attempt(control), "tangential", actuator=actuator)
         except NotConverged:
             run.record(run._split(previous, control, depth=1), "tangential", advanced=True,
                        actuator=actuator)
-        else:
-            cut = _gross_onset(run, increment, previous_actuator, actuator)
-            if cut is None or not _record_onset(run, hold(T=start + machine * cut,
-                                                          machine=machine), cut):
-                run.record(increment, "tangential", actuator=actuator)
-            else:
-                # The gross slip was recorded at its onset, not at the increment's end
-                # (its load and time then vary smoothly with the friction, which a fit
-                # needs); the rest of the increment follows.
-                try:
-                    run.record(run._attempt(control), "tangential", actuator=actuator)
-                except NotConverged:
-                    run.record(run._split(hold(T=start + machine * cut, machine=machine),
-                                          control, depth=1), "tangential", advanced=True,
-                               actuator=actuator)
         run.reached_gross = run.reached_gross or run.gross
         run.count_gross()
         previous = control
-        previous_actuator = actuator
-
-
-ONSET_OVERSHOOT = 1e-4
-"""A gross slip's cut lies this fraction of the increment past the onset found on the
-stuck line, so that the first node is surely over its limit."""
-
-
-def _gross_onset(run: _Run, increment: Increment, start: float, end: float) -> float | None:
-    """The actuator travel where ``increment``'s gross slip began, if well inside it."""
-    if run.frictionless or increment.u_before is None:
-        return None
-    contact = increment.state != OPEN
-    wave = increment.round_slipped >= 0
-    if not (contact.any() and wave[contact].all()):
-        return None
-    fraction = run.onset_fraction(increment) + ONSET_OVERSHOOT
-    if fraction >= 1.0 - 1e-3:
-        return None
-    return start + fraction * (end - start)
-
-
-def _record_onset(run: _Run, onset: Control, actuator: float) -> bool:
-    """Solve and keep the step that ends at a gross slip's onset; False if it fails."""
-    try:
-        increment = run._attempt(onset)
-    except NotConverged:
-        return False
-    run.record(increment, "tangential", actuator=actuator)
-    run.reached_gross = run.reached_gross or run.gross
-    run.count_gross()
-    return True
 
 
 def _may_jam(run: _Run) -> bool:
