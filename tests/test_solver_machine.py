@@ -49,6 +49,20 @@ def test_slips_release_load_and_the_flat_jumps(driven):
     assert np.all(before <= 1.0 * N + 1e-9) and np.all(after >= 0.85 * N - 1e-9)
 
 
+def test_a_gross_slip_lands_on_its_actuator_step():
+    # a slip lands on the step it happens in: every step, a gross slip's too, ends where
+    # the actuator's step ends (the solver once cut gross slips at their onset, off it)
+    path = LoadPath(normal_load=85.0, normal_control="force", machine_stiffness=40.0,
+                    max_travel=6.0, travel_step=0.03)
+    cycle = simulate(Slab(height=40.0, elements=40), Coulomb(fs=0.9, fd=0.6), path,
+                     cache=CACHE)
+    tangential = cycle["phase"].values == "tangential"
+    steps = cycle["actuator"].values[tangential] / 0.03
+    assert (cycle["substeps"].values[tangential] == 1).all()
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-9)
+    assert (cycle["wave"].values[tangential] == "gross").sum() >= 3
+
+
 def test_before_wave_equals_after_without_a_wave(driven):
     quiet = driven["wave"].values == "none"
     for name in ["T", "N", "DG", "DD", "DT"]:
