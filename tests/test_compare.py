@@ -19,6 +19,7 @@ from slipwave.compare import (
     place_on_map,
     verdict_counts,
 )
+from slipwave.errors import SlipwaveError, SolverError
 from slipwave.events import detect_events
 from slipwave.io import CHANNELS
 from slipwave.setup import read_test_setup
@@ -111,6 +112,29 @@ def test_the_law_s_neighbours_give_the_simulation_s_own_scatter(test_and_replay)
     assert (table.loc[compared, "scatter"] >= 0).all()
     assert (table.loc[compared, "tolerance"] >= alone.loc[compared, "tolerance"] - 1e-12).all()
     assert verdict_counts(table)["differs"] == 0
+
+
+def test_a_neighbour_the_solver_does_not_follow_is_left_out_and_named(test_and_replay,
+                                                                      monkeypatch):
+    _, setup, replay = test_and_replay
+    follows = type(setup).simulate
+
+    def stops_above_fd(self, friction, elements, **keywords):  # as a law past a cycle
+        if friction.dynamic > 0.6:
+            raise SlipwaveError("the solver failed") from SolverError(
+                438, float("nan"), "no convergence after 6 sub-step levels")
+        return follows(self, friction, elements, **keywords)
+
+    monkeypatch.setattr(type(setup), "simulate", stops_above_fd)
+    scatter = sequence_scatter(setup, Coulomb(fs=0.9, fd=0.6), min_drop=0.3, elements=24,
+                               gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])
+    assert np.allclose(scatter[["fs", "fd"]], [
+        [0.9 * (1 - SCATTER_STEP), 0.6], [0.9 * (1 + SCATTER_STEP), 0.6],
+        [0.9, 0.6 * (1 - SCATTER_STEP)]])
+    assert scatter.attrs["left_out"] == (
+        f"fs 0.9, fd {0.6 * (1 + SCATTER_STEP):.6g} (stopped at step 438: no convergence "
+        "after 6 sub-step levels (relative residual nan))")
+    assert {feature.name for feature in EVENT_FEATURES} < set(scatter.columns)
 
 
 def test_a_difference_within_the_law_s_scatter_agrees_and_says_so(test_and_replay):

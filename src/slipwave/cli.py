@@ -555,6 +555,9 @@ def _simulate_test(args: argparse.Namespace) -> None:
                                    step=float(fit["load_calibration"]), detection=detection,
                                    cache=cache)
         write_table(scatter, args.scatter, fit)
+        if scatter.attrs["left_out"]:
+            print(f"the law's scatter leaves out the neighbours the solver does not follow: "
+                  f"{scatter.attrs['left_out']}")
     print(f"{args.fit} -> {args.output}: {fit['chosen']} "
           f"{', '.join(f'{k} {v:.4g}' for k, v in fit['parameters'].items())}, "
           f"{replay.simulation.sizes['step']} steps, gross/partial edge threshold "

@@ -20,9 +20,9 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from slipwave.compare import ORIGIN, SCATTER_STEP, event_features, first_wave
+from slipwave.compare import EVENT_FEATURES, ORIGIN, SCATTER_STEP, event_features, first_wave
 from slipwave.defaults import BAND_MM, CONVENTIONS, SAMPLE_RATE_HZ
-from slipwave.errors import SlipwaveError
+from slipwave.errors import SlipwaveError, SolverError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.fit import detected_edge_threshold, simulated_recording
 from slipwave.photoelastic import Camera, Photoelastic
@@ -173,19 +173,31 @@ def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
     Returns
     -------
     pandas.DataFrame
-        One row per neighbour: ``fs``, ``fd`` and the values of
-        :data:`slipwave.compare.EVENT_FEATURES` and :data:`slipwave.compare.ORIGIN`.
+        One row per neighbour the solver follows over the whole test: ``fs``, ``fd``
+        and the values of :data:`slipwave.compare.EVENT_FEATURES` and
+        :data:`slipwave.compare.ORIGIN`. A neighbour it does not follow (a law next to
+        one where the quasi-static contact has no solution) is left out, and
+        ``attrs["left_out"]`` says which and where the solver stopped.
 
     """
+    columns = ["fs", "fd", *(feature.name for feature in EVENT_FEATURES), ORIGIN.name]
     rows = []
+    left_out = []
     for law in neighbouring_laws(friction, step):
-        simulation = setup.simulate(law, elements, cache=cache)
+        try:
+            simulation = setup.simulate(law, elements, cache=cache)
+        except SlipwaveError as err:  # the law itself was followed: the solver's words
+            cause = err.__cause__ if isinstance(err.__cause__, SolverError) else err
+            left_out.append(f"fs {law.fs:.6g}, fd {law.dynamic:.6g} (stopped at {cause})")
+            continue
         events = detect_events(simulated_recording(simulation, setup, sample_rate=sample_rate),
                                **detection.keywords(min_drop=min_drop, edge_convention="x_axis",
                                                     gross_edge_ratio=gross_edge_ratio))
         rows.append({"fs": law.fs, "fd": law.dynamic, **event_features(events),
                      ORIGIN.name: first_wave(simulation)[0]})
-    return pd.DataFrame(rows)
+    table = pd.DataFrame(rows, columns=columns)
+    table.attrs["left_out"] = "; ".join(left_out)
+    return table
 
 
 def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None = None, *,
