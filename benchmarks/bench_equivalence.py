@@ -58,6 +58,7 @@ FEATURES = ("T_before", "T_after", "ratio_before", "ratio_after", "drop", "DG_ju
 _RUN = """
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from functools import partial
 from pathlib import Path
 import xarray as xr
 from slipwave.bench.generate import BenchTest, simulate_test
@@ -82,7 +83,9 @@ def test(item):
 
 if __name__ == "__main__":
     with ProcessPoolExecutor(2) as pool:
-        rows = list(pool.map(map_row, PAPER_HEIGHT_RATIOS, [PAPER_FRICTIONS] * 12))
+        # the mesh named: the map's default has moved from 160 to 320 elements since
+        rows = list(pool.map(partial(map_row, elements=160), PAPER_HEIGHT_RATIOS,
+                             [PAPER_FRICTIONS] * 12))
         xr.concat(rows, "height_ratio")[["sequence"]].to_netcdf(Path(sys.argv[1]) / "map.nc")
         list(pool.map(test, TESTS.items()))
 """
