@@ -21,9 +21,9 @@ from slipwave.compare import (
 )
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.events import detect_events
-from slipwave.io import CHANNELS
+from slipwave.io import CHANNELS, read_table, write_table
 from slipwave.setup import read_test_setup
-from slipwave.simulate import replay_test, sequence_scatter
+from slipwave.simulate import left_out_neighbours, replay_test, sequence_scatter
 from slipwave.solver import Coulomb
 
 CELLS = {"test_id": "v", "youngs_modulus_mpa": "7", "poisson_ratio": "0.48",
@@ -115,7 +115,7 @@ def test_the_law_s_neighbours_give_the_simulation_s_own_scatter(test_and_replay)
 
 
 def test_a_neighbour_the_solver_does_not_follow_is_left_out_and_named(test_and_replay,
-                                                                      monkeypatch):
+                                                                      monkeypatch, tmp_path):
     _, setup, replay = test_and_replay
     follows = type(setup).simulate
 
@@ -135,6 +135,11 @@ def test_a_neighbour_the_solver_does_not_follow_is_left_out_and_named(test_and_r
         f"fs 0.9, fd {0.6 * (1 + SCATTER_STEP):.6g} (stopped at step 438: no convergence "
         "after 6 sub-step levels (relative residual nan))")
     assert {feature.name for feature in EVENT_FEATURES} < set(scatter.columns)
+    # and the comparison finds which, from the table as written (6 figures)
+    written = tmp_path / "scatter.csv"
+    write_table(scatter, written)
+    assert left_out_neighbours(Coulomb(fs=0.9, fd=0.6), SCATTER_STEP, read_table(written)) == [
+        {"fs": 0.9, "fd": 0.6 * (1 + SCATTER_STEP)}]
 
 
 def test_a_difference_within_the_law_s_scatter_agrees_and_says_so(test_and_replay):

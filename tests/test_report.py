@@ -115,7 +115,8 @@ def built(tmp_path_factory):
     # a law simulated at other parameters than the medians (no figures: the words only)
     noted = {**pairing, "figures": dict.fromkeys(pairing["figures"]),
              "simulated": {"fs": 0.8123, "fd": 0.6012},
-             "simulated_note": "The solver does not follow the posterior medians here."}
+             "simulated_note": "The solver does not follow the posterior medians here.",
+             "scatter_left_out": [{"fs": 0.9, "fd": 0.606}]}
     pages["noted"] = write_test_page(recording, folder / "noted.html", events, None, noted)
     # partly missing: no simulation at all; a T-only recording
     pages["measured"] = write_test_page(recording, folder / "measured.html", events,
@@ -177,6 +178,14 @@ def test_page_says_which_law_is_simulated_when_not_the_medians(built):
     noted = pages["noted"].read_text()
     assert ("<strong>The law simulated.</strong> The solver does not follow the posterior "
             "medians here. Its parameters: fs 0.8123, fd 0.6012.") in noted
+
+
+def test_page_says_which_neighbours_the_scatter_leaves_out(built):
+    pages, *_ = built
+    assert "The scatter leaves out" not in pages["full"].read_text()  # every one followed
+    assert ("The scatter leaves out 1 of the neighbours, which the solver does not follow: "
+            "fs 0.9, fd 0.606; it is taken over the law and the others.") in (
+        pages["noted"].read_text())
 
 
 def test_partial_reports_say_what_is_missing(built):

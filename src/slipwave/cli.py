@@ -243,9 +243,10 @@ def _compare(args: argparse.Namespace) -> None:
 
     from slipwave.compare import compare_test, place_on_map, verdict_counts
     from slipwave.events import events_table
-    from slipwave.fit import read_fit
+    from slipwave.fit import chosen_law, read_fit
     from slipwave.identity import check_same_test
     from slipwave.io import atomic_output, read_dataset, read_table, write_table
+    from slipwave.simulate import left_out_neighbours
 
     events_ds = read_dataset(args.events, "events")
     measured = events_table(events_ds)
@@ -270,6 +271,9 @@ def _compare(args: argparse.Namespace) -> None:
                                "recording_sha256": fit["recording_sha256"],
                                "law": fit["chosen"], "parameters": fit["parameters"],
                                "verdicts": verdict_counts(table)}
+    if scatter is not None:
+        summary["scatter_left_out"] = left_out_neighbours(
+            chosen_law(fit), float(fit["load_calibration"]), scatter)
     if args.map is not None:
         setup = fit["setup"]
         ratio = setup["height_mm"]["value"] / setup["length_mm"]["value"]
@@ -422,7 +426,7 @@ def _report(args: argparse.Namespace) -> None:
             recording, events, fit=fit, comparison=tables["comparison"], simulated=simulated,
             simulated_events=tables["simulated_events"], contact=contact,
             placement=compared.get("map"), behaviour_map=behaviour_map, kymo=kymo,
-            clock=clock)
+            clock=clock, scatter_left_out=compared.get("scatter_left_out"))
     write_test_page(recording, args.output, events, video, pairing, pdf=args.pdf,
                     workers=args.threads)
     print(f"{args.recording} -> {args.output}" + (f", {args.pdf}" if args.pdf else ""))

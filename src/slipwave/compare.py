@@ -408,8 +408,9 @@ def read_comparison(path: str | PathLike[str]) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``test_id``, ``recording_sha256``, ``law``, ``parameters``, ``verdicts`` and,
-        when placed, ``map``.
+        ``test_id``, ``recording_sha256``, ``law``, ``parameters``, ``verdicts``,
+        when placed ``map``, and when compared with a scatter ``scatter_left_out``
+        (:func:`slipwave.simulate.left_out_neighbours`).
 
     Raises
     ------

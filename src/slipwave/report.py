@@ -333,6 +333,7 @@ def pairing_summary(
     behaviour_map: xr.Dataset | None = None,
     kymo: xr.Dataset | None = None,
     clock: ClockFit | None = None,
+    scatter_left_out: list[dict[str, float]] | None = None,
 ) -> dict[str, Any]:
     """The page's sections on the test's simulation: what is there, and what is missing.
 
@@ -356,6 +357,9 @@ def pairing_summary(
         ``map.nc``, to draw the test on it, or ``None``.
     kymo, clock
         The video's kymograph and clock, for the space-time figure, or ``None``.
+    scatter_left_out
+        The neighbouring laws the comparison's scatter lacks, the solver not following
+        them (``comparison.json``), or ``None``.
 
     Returns
     -------
@@ -367,8 +371,9 @@ def pairing_summary(
         ``ratios``, ``space_time``, ``frames``, ``map``), ``placement``, ``missing``
         (what could not be shown, in words) and ``scatter_step`` (how far apart the
         coefficients of the comparison's neighbouring simulations are: the fit's load
-        calibration), ``simulated`` and ``simulated_note`` (the law the simulation takes,
-        and why it is not the posterior medians, or None).
+        calibration), ``scatter_left_out`` (the neighbours it lacks, a list),
+        ``simulated`` and ``simulated_note`` (the law the simulation takes, and why it
+        is not the posterior medians, or None).
 
     """
     missing: list[str] = []
@@ -379,7 +384,8 @@ def pairing_summary(
                                   "map")),
         "placement": placement, "missing": missing, "edge_reference": None,
         "edge_threshold": None, "fit_edge_threshold": None, "elements": None,
-        "frame_labels": [], "scatter_step": SCATTER_STEP, "simulated": None,
+        "frame_labels": [], "scatter_step": SCATTER_STEP,
+        "scatter_left_out": list(scatter_left_out or []), "simulated": None,
         "simulated_note": None}
     if simulated is not None and "gross_edge_ratio" in simulated.attrs:
         # what detection told the test's events by, read off the simulation's slips

@@ -200,6 +200,40 @@ def sequence_scatter(setup: TestSetup, friction: Coulomb, *, min_drop: float,
     return table
 
 
+def left_out_neighbours(friction: Coulomb, step: float, scatter: pd.DataFrame
+                        ) -> list[dict[str, float]]:
+    """The neighbouring laws a scatter table lacks (those the solver did not follow).
+
+    Parameters
+    ----------
+    friction
+        The law whose scatter it is.
+    step
+        How far its neighbours' coefficients moved (:func:`neighbouring_laws`).
+    scatter
+        :func:`sequence_scatter`'s table, as written (coefficients to 6 figures).
+
+    Returns
+    -------
+    list of dict
+        ``fs`` and ``fd`` of each neighbour with no row, in :func:`neighbouring_laws`'
+        order.
+
+    Examples
+    --------
+    >>> table = pd.DataFrame({"fs": [0.99, 1.01, 1.0], "fd": [0.5, 0.5, 0.505]})
+    >>> left_out_neighbours(Coulomb(fs=1.0, fd=0.5), 0.01, table)
+    [{'fs': 1.0, 'fd': 0.495}]
+    """
+    rows = scatter[["fs", "fd"]].to_numpy(dtype=float)
+    left_out = []
+    for law in neighbouring_laws(friction, step):
+        found = np.isclose(rows, [law.fs, law.dynamic], rtol=1e-5, atol=0.0).all(axis=1)
+        if not found.any():
+            left_out.append({"fs": float(law.fs), "fd": float(law.dynamic)})
+    return left_out
+
+
 def contact_history(simulation: xr.Dataset, times: np.ndarray, slab: Slab | None = None, *,
                     band_mm: tuple[float, float] = BAND_MM) -> xr.Dataset:
     """Zone states and, with ``slab``, the simulated kymograph, against time.
