@@ -304,6 +304,39 @@ def test_evidence_prefers_the_law_the_data_need():
     assert dc["low"] < 0.01 * 10**0.75 < dc["high"]
 
 
+def test_the_posterior_s_uncertain_density_is_sought_near_the_mode_not_far_off():
+    """MAXV: where the surrogate is unsure and the likelihood may be high, not where it
+    is unsure and surely low, nor where it is sure."""
+    rng = np.random.default_rng(9)
+    box = np.array([[0.0, 1.0], [0.0, 1.0]])
+    points = rng.uniform(0.0, 1.0, (60, 2))
+    points = points[np.abs(points[:, 0] - 0.45) > 0.12]  # a gap beside the mode
+    logliks = -0.5 * np.sum(((points - [0.5, 0.5]) / 0.08) ** 2, axis=1)
+    process = surrogate(points, logliks, box, seed=0)
+    gap, guessed, far = np.array([[0.42, 0.5], [0.62, 0.5], [0.02, 0.98]])
+    spread = process.density_spread(np.array([gap, guessed, far]))
+    assert spread[0] > 3 * spread[1] and spread[0] > 100 * spread[2]
+    assert np.all((spread >= 0.0) & (spread <= np.e))
+
+
+def test_a_slip_weakening_search_keeps_dc_over_its_first_range():
+    """Dc trades against fs along a ridge: no stage narrows it (UNZOOMED)."""
+    rng = np.random.default_rng(10)
+    observed = np.array([0.8, 0.6])
+
+    def weakening(params):
+        mean = np.array([params["fs"] - 0.3 * (np.log10(params["dc"]) + 1.2), params["fd"]])
+        return mean + rng.normal(0.0, 0.01, (4, 2))
+
+    settings = SearchSettings(stages=3, design=2, acquisitions=1, refinements=0,
+                              exploration=2.0, samples=300, seed=0)
+    box = np.array([[0.6, 1.1], [0.5, 0.7], [-2.0, -0.6]])
+    posterior = search_law("slip-weakening", weakening,
+                           SyntheticLikelihood(observed, np.full(2, 1e-3)), box, settings)
+    assert posterior.box[2].tolist() == box[2].tolist()
+    assert posterior.box[0].tolist() != box[0].tolist()  # fs's zoomed
+
+
 class _Meshed:
     """A stand-in for an ensemble on one mesh: members' features = law's + offset + noise."""
 

@@ -6,7 +6,8 @@ needs. The search is Bayesian optimisation of a Gaussian-process surrogate, as B
 does (Gutmann and Corander 2016, JMLR 17:125): the log-likelihood is evaluated at a
 Latin hypercube over the law's search box (scipy's :mod:`scipy.stats.qmc`), a Gaussian
 process is fitted to it (scikit-learn's, with a white-noise term for the ensemble's own
-scatter), and more points are added where its upper confidence bound is highest, then
+scatter), and more points are added where its upper confidence bound is highest (the
+mode), then where the posterior density's own uncertainty is largest (its extent), then
 where its posterior has mass. The posterior is the prior times the exponential of the
 surrogate's mean, sampled by emcee's affine-invariant ensemble sampler (Foreman-Mackey
 et al. 2013); a law's evidence is that posterior's normalising constant, estimated by
@@ -46,12 +47,14 @@ class SearchSettings:
     design
         Points of each stage's Latin hypercube, per parameter.
     acquisitions
-        Points added in each stage where the surrogate's upper confidence bound is
-        highest, per parameter.
+        Points added in each stage, per parameter: in the first where the surrogate's
+        upper confidence bound is highest, in the later ones where the posterior
+        density's own uncertainty is (:meth:`Surrogate.density_spread`).
     refinements
         Points added from the surrogate's posterior, per parameter.
     exploration
-        The upper confidence bound's multiple of the surrogate's standard deviation.
+        The upper confidence bound's multiple of the surrogate's standard deviation
+        (the first stage's acquisitions).
     samples
         Posterior samples kept.
     seed
@@ -222,6 +225,38 @@ class Surrogate:
         """
         mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
         return self.top + 1.0 - np.exp(mean - exploration * sd)
+
+    def density_spread(self, points: np.ndarray) -> np.ndarray:
+        """The standard deviation of the unnormalised posterior density, exp(loglik - m).
+
+        Where the surrogate's uncertainty is both large and plausible: the posterior's
+        variance, the acquisition Järvenpää et al. (2019, Bayesian Analysis 14:595)
+        call MAXV, which maps a posterior rather than its mode (a ridge of equal
+        likelihood along its length). Exact for the process's normal prediction g of
+        the log distance, exp(loglik - m) = exp(1 - exp(g)), by Gauss-Hermite
+        quadrature (:data:`QUADRATURE` nodes).
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters).
+
+        Returns
+        -------
+        numpy.ndarray
+            One per point, between 0 and e.
+
+        """
+        mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
+        nodes, weights = np.polynomial.hermite.hermgauss(QUADRATURE)
+        weights = weights / np.sqrt(np.pi)
+        density = np.exp(1.0 - np.exp(mean[:, None] + np.sqrt(2.0) * sd[:, None] * nodes))
+        first, second = density @ weights, density**2 @ weights
+        return np.sqrt(np.maximum(second - first**2, 0.0))
+
+
+QUADRATURE = 16
+"""Gauss-Hermite nodes of :meth:`Surrogate.density_spread`."""
 
 
 def surrogate(points: np.ndarray, logliks: np.ndarray, box: np.ndarray, seed: int
@@ -399,15 +434,60 @@ def log_evidence(process: Surrogate, box: np.ndarray, law: str,
     return float(logsumexp(log_weights) - np.log(draws) - log_volume)
 
 
+def ridge_ends(samples: np.ndarray, box: np.ndarray, reach: float) -> np.ndarray:
+    """Where a ridge of the posterior would continue: beyond its ends on its longest axis.
+
+    The draws' 0.5 and 99.5 % places on their longest axis (:func:`_longest_axis`, in
+    the box's unit cube), each moved outward by ``reach`` times the distance between
+    them.
+
+    Parameters
+    ----------
+    samples
+        Draws from the surrogate posterior, shape (draws, parameters).
+    box
+        The box they were drawn in.
+    reach
+        How far beyond each end, in lengths of the posterior along its axis.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (2, parameters), the search's coordinates (possibly outside the box).
+
+    Examples
+    --------
+    Draws along a diagonal of the unit square, 0.4 to 0.6: their 99 % range (0.401 to
+    0.599) reaches as far again each way.
+
+    >>> samples = np.column_stack([np.linspace(0.4, 0.6, 1001)] * 2)
+    >>> box = np.array([[0.0, 1.0], [0.0, 1.0]])
+    >>> ridge_ends(samples, box, 1.0).round(3).tolist()
+    [[0.203, 0.203], [0.797, 0.797]]
+    """
+    centre, axis = _longest_axis(samples, box)
+    along = (scaled(samples, box) - centre) @ axis
+    low, high = np.quantile(along, [0.005, 0.995])
+    length = high - low
+    unit = centre + np.outer([low - reach * length, high + reach * length], axis)
+    return box[:, 0] + unit * (box[:, 1] - box[:, 0])
+
+
 def _zoomed(samples: np.ndarray, best: np.ndarray, box: np.ndarray, bounds: np.ndarray
             ) -> np.ndarray:
     """The next stage's box: the posterior's 99 % range and the best guesses, widened.
 
     The surrogate can be wrong where few guesses were made: the best guesses evaluated
-    stay inside, and a box whose best guess lies at its edge reaches beyond it.
+    stay inside, a box whose best guess lies at its edge reaches beyond it, and the box
+    reaches along the posterior's longest axis beyond its ends (:func:`ridge_ends`): a
+    posterior stretched along a ridge of equal likelihood (a slip-weakening law's fs
+    against its Dc) may go on past where the last stage's guesses saw it end, and the
+    next stage's guesses look there.
     """
     low, high = np.quantile(samples, [0.005, 0.995], axis=0)
-    low, high = np.minimum(low, best.min(axis=0)), np.maximum(high, best.max(axis=0))
+    ends = ridge_ends(samples, box, RIDGE_REACH)
+    low = np.minimum(np.minimum(low, best.min(axis=0)), ends.min(axis=0))
+    high = np.maximum(np.maximum(high, best.max(axis=0)), ends.max(axis=0))
     span = np.maximum(high - low, MIN_SPAN * (bounds[:, 1] - bounds[:, 0]))
     centre = 0.5 * (low + high)
     zoomed = np.column_stack([centre - ZOOM * span, centre + ZOOM * span])
@@ -571,6 +651,17 @@ its centre): room for the surrogate to see the likelihood fall."""
 EDGE = 0.05
 """A best guess within this share of the box's width from an edge: the box reaches half
 its width beyond that edge (within the prior)."""
+UNZOOMED = ("dc", "runin_slips")
+"""Parameters every stage searches over their first box. Each trades against fs along
+a ridge of equal likelihood (a slip-weakening law's peak load is reached from a lower
+fs over a longer Dc; a run-in's from a lower first fs rising faster), so the data fix fs
+given them but leave them loose: in a calibration test, one ridge from fs 0.78 at Dc
+0.05 mm to the true 0.61 at 0.2 mm, both ends of equal likelihood, and zooming onto the
+end the first guesses found cut off the other. fs's own zoom keeps the ridge's reach,
+which its posterior spans once the guesses lie along it."""
+RIDGE_REACH = 1.0
+"""How far a stage's box reaches beyond the posterior's ends along its longest axis, in
+lengths of the posterior along it (:func:`ridge_ends`)."""
 MIN_SPAN = 0.002
 """The narrowest box, as a share of the prior's range in each coordinate."""
 SETTLED = 0.5
@@ -586,8 +677,10 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     """A law's posterior on a test, by a Gaussian-process surrogate of its likelihood.
 
     In stages: a Latin hypercube over the box, points added at the surrogate's upper
-    confidence bound, then the box zoomed onto the surrogate posterior's 99 % range
-    (:data:`ZOOM`), until it no longer shrinks (:data:`SETTLED`) or
+    confidence bound (the first stage) or where the posterior density is most uncertain
+    (:meth:`Surrogate.density_spread`, the later ones), then the box zoomed onto the
+    surrogate posterior's 99 % range (:data:`ZOOM`, :func:`_zoomed`; not in
+    :data:`UNZOOMED`), until it no longer shrinks (:data:`SETTLED`) or
     ``settings.stages`` are done; last, points drawn from the surrogate's posterior,
     the surrogate refitted after each. A posterior a fraction of a percent wide in a
     box the prior's width could not be resolved by one stationary surrogate. With
@@ -679,8 +772,11 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
         for _ in range(settings.acquisitions * p):
             process, _ = fitted(box)
             candidates = _fill(law, box, 1024, rng, inside, latin=False)
-            evaluate(candidates[int(np.argmax(process.upper(candidates,
-                                                            settings.exploration)))])
+            # the first stage looks for the likelihood's mode, the later ones map the
+            # posterior about it
+            merit = (process.upper(candidates, settings.exploration) if stage == 0
+                     else process.density_spread(candidates))
+            evaluate(candidates[int(np.argmax(merit))])
         if stage == 0 and model_error is not None:
             process, best = fitted(box)
             spread = sample_posterior(process, box, inside, best, samples=1000,
@@ -696,6 +792,8 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
         draws = sample_posterior(process, box, inside, best, samples=1000,
                                  seed=int(rng.integers(2**31)))
         zoomed = _zoomed(draws, best, box, bounds)
+        kept = np.array([name in UNZOOMED for name in LAWS[law]])
+        zoomed[kept] = box[kept]
         shrink = (zoomed[:, 1] - zoomed[:, 0]) / (box[:, 1] - box[:, 0])
         within = np.all((zoomed[:, 0] >= box[:, 0]) & (zoomed[:, 1] <= box[:, 1]))
         if stage > 0 and within and np.all(shrink > SETTLED):
