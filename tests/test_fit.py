@@ -495,14 +495,11 @@ def test_the_first_boxes_follow_the_measurement_and_coulomb(virtual):
     coulomb = Posterior("coulomb", np.column_stack([rng.normal(0.95, 0.01, 500),
                                                     rng.normal(0.47, 0.005, 500)]),
                         0.0, np.zeros((0, 2)), np.zeros(0), box)
-    # slip-weakening's fs and the run-in's first fs from the prior's floor (below a
-    # Coulomb law's, which the contact may reach after a run-in from much lower)
+    # slip-weakening's fs from the prior's floor; the run-in's about Coulomb's
     weakening = first_box("slip-weakening", events, coulomb)
     assert weakening[0, 0] == pytest.approx(weakening[1, 0] + STATIC_EXCESS[0])
     assert weakening[0, 1] > 1.15 and 0.35 < weakening[1, 0] < 0.37 < 0.48 < weakening[1, 1]
-    runin = first_box("run-in", events, coulomb)
-    assert runin[0, 0] == pytest.approx(runin[1, 0] + STATIC_EXCESS[0])
-    assert runin[0, 1] > 1.15 and runin[2, 0] < 0.6 and runin[2, 1] > 1.3
+    assert 0.75 < first_box("run-in", events, coulomb)[0, 0] < 0.85
 
 
 def test_missing_geometry_is_one_error_naming_the_column_and_nothing_is_written(

@@ -127,8 +127,7 @@ unloading, a sampled trough), never by a tenth."""
 SEARCH_MARGIN = {"fs": (0.15, 0.25), "fd": (0.02, 0.02), "fs_final": (0.4, 0.4)}
 """How far the richer laws' first box reaches beyond Coulomb's 95 % interval (below,
 above): a run-in's first and final fs lie either side of Coulomb's fs. A slip-weakening
-law's fs and a run-in's first fs reach down to the prior's floor instead
-(:func:`first_box`)."""
+law's fs reaches down to the prior's floor instead (:func:`first_box`)."""
 FAMILY_LEVEL = 0.95
 """The predictive check's level over all features at once: each feature's band is
 Bonferroni's, z of 1 - (1 - level) / (2 features)."""
@@ -240,9 +239,8 @@ def first_box(law: str, measured: pd.DataFrame, coulomb: Posterior | None) -> np
     """Where a law's search starts, in its prior's coordinates.
 
     Coulomb: fd within :data:`FD_WINDOW` of T/|N| after the largest drops, fs over its
-    prior. The others: around Coulomb's posterior (:data:`SEARCH_MARGIN`), their fs
-    (a run-in's first) from the prior's floor, their own parameters over their priors;
-    without Coulomb's, as Coulomb's.
+    prior. The others: around Coulomb's posterior (:data:`SEARCH_MARGIN`), their own
+    parameters over their priors; without Coulomb's, as Coulomb's.
 
     Parameters
     ----------
@@ -281,10 +279,6 @@ def first_box(law: str, measured: pd.DataFrame, coulomb: Posterior | None) -> np
         # Down to the prior's floor, fd plus the least static excess.
         box[names.index("fs")][0] = box[names.index("fd")][0] + STATIC_EXCESS[0]
     if "fs_final" in names:
-        # Its first fs lies below Coulomb's where the contact strengthens (a Coulomb law
-        # fitted to a run-in from 0.8 to 1.1 found fs 1.03 [1.027, 1.033]): down to the
-        # prior's floor too.
-        box[names.index("fs")][0] = box[names.index("fd")][0] + STATIC_EXCESS[0]
         below, above = SEARCH_MARGIN["fs_final"]
         box[names.index("fs_final")] = (summary["fs"]["low"] - below,
                                         summary["fs"]["high"] + above)
