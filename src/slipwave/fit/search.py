@@ -207,6 +207,11 @@ class Surrogate:
         """
         return self.top + 1.0 - np.exp(self.process.predict(scaled(points, self.box)))
 
+    def _predicted(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The process's mean and standard deviation of the log distance at points."""
+        mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
+        return mean, sd
+
     def upper(self, points: np.ndarray, exploration: float) -> np.ndarray:
         """The log-likelihood's upper confidence bound (the distance's lower one).
 
@@ -223,7 +228,7 @@ class Surrogate:
             One per point.
 
         """
-        mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
+        mean, sd = self._predicted(points)
         return self.top + 1.0 - np.exp(mean - exploration * sd)
 
     def density_spread(self, points: np.ndarray) -> np.ndarray:
@@ -247,7 +252,7 @@ class Surrogate:
             One per point, between 0 and e.
 
         """
-        mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
+        mean, sd = self._predicted(points)
         nodes, weights = np.polynomial.hermite.hermgauss(QUADRATURE)
         weights = weights / np.sqrt(np.pi)
         density = np.exp(1.0 - np.exp(mean[:, None] + np.sqrt(2.0) * sd[:, None] * nodes))
