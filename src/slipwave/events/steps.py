@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from numba import njit
 
 from slipwave.defaults import MAX_DURATION_S, MAX_SPIKE, MIN_ASYMMETRY, MIN_FALL_RATE, THRESHOLD
 from slipwave.errors import SlipwaveError
@@ -249,9 +250,29 @@ def _fall_pairs(smooth: np.ndarray, threshold: float, *, block: int, max_duratio
 
 def _turn(values: np.ndarray, swing: float) -> int:
     """Index of the lowest value of ``values`` before they rise by more than ``swing``."""
-    lowest = np.minimum.accumulate(values)
-    turned = np.flatnonzero(values > lowest + swing)
-    return int(np.argmin(values[: turned[0]] if turned.size else values))
+    return int(_lowest_before_rise(values, swing)[0])
+
+
+@njit(cache=True)
+def _lowest_before_rise(values: np.ndarray, swing: float) -> tuple[int, bool]:
+    """Where ``values`` are lowest before they first rise by more than ``swing``.
+
+    A rise is measured from their lowest value so far; the lowest place is the first
+    one, and the second value says whether they rise so at all. Compiled: the
+    detection of a fit's every member asks it of every fall.
+    """
+    lowest = values[0]
+    end = values.size
+    for k in range(values.size):
+        lowest = min(lowest, values[k])
+        if values[k] > lowest + swing:
+            end = k
+            break
+    best = 0
+    for k in range(1, end):
+        if values[k] < values[best]:
+            best = k
+    return best, end < values.size
 
 
 def _whole_fall(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tuple[int, int]:
@@ -292,11 +313,9 @@ def _rise_before(smooth: np.ndarray, top: int, span: int, swing: float
     while True:
         start = max(0, top - reach)
         backwards = smooth[start : top + 1][::-1]
-        lowest = np.minimum.accumulate(backwards)
-        turned = np.flatnonzero(backwards > lowest + swing)
-        if turned.size or start == 0:
-            low = int(np.argmin(backwards[: turned[0]] if turned.size else backwards))
-            return float(backwards[0] - backwards[low]), low, bool(turned.size)
+        low, turned = _lowest_before_rise(backwards, swing)
+        if turned or start == 0:
+            return float(backwards[0] - backwards[low]), int(low), bool(turned)
         reach *= 4
 
 
@@ -331,13 +350,13 @@ def _asymmetry(smooth: np.ndarray, top: int, bottom: int, swing: float) -> float
     return float(max(fall_rate * length / rise, length / span))
 
 
-def _hinge(values: np.ndarray, candidates: np.ndarray) -> tuple[int, np.ndarray]:
-    """Best continuous two-segment line through ``values`` (least squares).
+def _hinge(values: np.ndarray, candidates: np.ndarray) -> int:
+    """Breakpoint of the best continuous two-segment line through ``values`` (least squares).
 
     ``values[i] = a + b i + c max(i - k, 0)`` for each breakpoint ``k`` of
-    ``candidates``; returns the best ``k`` and its ``(a, b, c)``. The ramp
-    ``max(i - k, 0)`` is projected off the straight line's basis, and the sums
-    this needs come from suffix sums: every breakpoint together costs O(n).
+    ``candidates``; returns the best ``k``. The ramp ``max(i - k, 0)`` is projected
+    off the straight line's basis, and the sums this needs come from suffix sums:
+    every breakpoint together costs O(n).
     """
     n = values.size
     centre = 0.5 * (n - 1)
@@ -358,12 +377,7 @@ def _hinge(values: np.ndarray, candidates: np.ndarray) -> tuple[int, np.ndarray]
     ramp_residual = after(residual) * -k + after(i * residual)
     with np.errstate(divide="ignore", invalid="ignore"):
         gain = np.where(ramp_norm > 1e-9, ramp_residual**2 / ramp_norm, 0.0)
-    best = int(np.argmax(gain))
-    # the best breakpoint's coefficients, from its 3 x 3 normal equations
-    ramp = np.maximum(i - k[best], 0.0)
-    basis = np.stack([np.ones(n), i, ramp], axis=1)
-    (a, b, c), *_ = np.linalg.lstsq(basis, values, rcond=None)
-    return int(candidates[best]), np.array([a - b * centre, b, c])
+    return int(candidates[int(np.argmax(gain))])
 
 
 def refine_step(
@@ -412,11 +426,11 @@ def refine_step(
     middle = min(max(middle, top_local + 1), bottom_local)
     # onset: a hinge between the ramp before and the fall, breakpoints up to the middle
     head = window[: middle + 1]
-    onset, _ = _hinge(head, np.arange(1, max(middle, 2)))
+    onset = _hinge(head, np.arange(1, max(middle, 2)))
     # end: a hinge between the fall and what follows, breakpoints after the middle
     first = middle - 1
     tail = window[first:]
-    end, _ = _hinge(tail, np.arange(1, max(tail.size - 2, 2)))
+    end = _hinge(tail, np.arange(1, max(tail.size - 2, 2)))
     end += first
     # levels from the straight lines before the onset and after the end (the hinges'
     # continuity would pull them towards the fall)
@@ -444,13 +458,36 @@ def _without_spikes(values: np.ndarray, max_spike: int) -> np.ndarray:
     values = np.asarray(values, dtype=float)
     if max_spike < 1 or values.size < 2 * max_spike + 1:
         return values
-    from scipy.ndimage import median_filter
+    return _despiked(values, max_spike, _MAD_TO_SIGMA)
 
-    median = median_filter(values, size=2 * max_spike + 1, mode="nearest")
+
+@njit(cache=True)
+def _despiked(values: np.ndarray, half: int, mad_to_sigma: float) -> np.ndarray:
+    """:func:`_without_spikes`, compiled: a fit's members call it for every fall.
+
+    The running median repeats the end samples beyond the ends (as
+    ``scipy.ndimage.median_filter``'s ``"nearest"``), of an odd count: exact.
+    """
+    n = values.size
+    median = np.empty(n)
+    window = np.empty(2 * half + 1)
+    for i in range(n):
+        for k in range(-half, half + 1):  # sorted as it is filled (a few samples)
+            value = values[min(max(i + k, 0), n - 1)]
+            j = k + half
+            while j > 0 and window[j - 1] > value:
+                window[j] = window[j - 1]
+                j -= 1
+            window[j] = value
+        median[i] = window[half]
     deviation = values - median
-    spread = _MAD_TO_SIGMA * float(np.median(np.abs(deviation)))
-    spikes = np.abs(deviation) > 5.0 * spread if spread > 0 else deviation != 0
-    return np.where(spikes, median, values)
+    spread = mad_to_sigma * np.median(np.abs(deviation))
+    out = values.copy()
+    for i in range(n):
+        spike = abs(deviation[i]) > 5.0 * spread if spread > 0 else deviation[i] != 0
+        if spike:
+            out[i] = median[i]
+    return out
 
 
 def _prepare(time: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float,

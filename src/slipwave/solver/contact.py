@@ -126,9 +126,10 @@ class Body:
         self.zones = active_set.zone_solver(stiffness, initial_gap)
         self.K = self.zones.K
         self.g0 = self.zones.g0
-        self.ix = np.arange(self.n)
-        self.iy = self.n + self.ix
-        self.cy = np.diag(self.K)[self.iy]  # augmentation: the nodes' own stiffness
+        # the x and y displacements' places in [ux, uy]: slices, so reading them copies nothing
+        self.ix = slice(0, self.n)
+        self.iy = slice(self.n, 2 * self.n)
+        self.cy = np.diag(self.K)[self.iy].copy()  # augmentation: the nodes' own stiffness
         self.sum_x = self.zones.sum_x  # sum Q = sum_x @ u
         self.sum_y = self.zones.sum_y
 
