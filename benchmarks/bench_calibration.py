@@ -59,7 +59,7 @@ from slipwave.defaults import FIT_ELEMENTS, LOAD_CALIBRATION
 from slipwave.errors import SlipwaveError
 from slipwave.fit import FitSettings, measured_events
 from slipwave.fit.laws import LAWS, draw_prior
-from slipwave.fit.procedure import dc_per_excess, fit_laws, predictive_check
+from slipwave.fit.procedure import choose_law, dc_per_excess, fit_laws
 from slipwave.io import read_acquisition
 from slipwave.setup import Setting, TestSetup, read_test_setup
 from targets import check, finish
@@ -149,9 +149,8 @@ def one(job: tuple[int, int, int]) -> dict[str, Any]:
         fitted = fit_laws(setup, events, settings)
     except SlipwaveError as err:
         return {"index": index, "truth": truth, "error": str(err), "redrawn": redrawn}
-    chosen = fitted.chosen
-    predictive = predictive_check(fitted.ensemble, chosen, settings.predictive_members,
-                                  settings.search.seed, fitted.error)
+    choice = choose_law(fitted, settings)
+    chosen, predictive = choice.posterior, choice.predictive
     ranks = {}
     if truth["law"] in fitted.posteriors:
         own = fitted.posteriors[truth["law"]]

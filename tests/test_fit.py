@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -13,7 +14,7 @@ from fuzzing import valid_fit
 from slipwave.bench.generate import BenchTest, simulate_test, write_test
 from slipwave.cli import main
 from slipwave.errors import SlipwaveError
-from slipwave.fit import FitSettings, fit_test, measured_events, read_fit, slip_features
+from slipwave.fit import FitSettings, fit_test, measured_events, procedure, read_fit, slip_features
 from slipwave.fit.ensemble import Ensemble, Member, Nuisances, draw_members, mesh_error
 from slipwave.fit.features import (
     FEATURES,
@@ -569,3 +570,51 @@ def test_simulated_law_is_the_medians_or_the_nearest_draw_the_solver_follows() -
     assert solver.tried[0] == round(median, 6) and len(solver.tried) > 2
     with pytest.raises(SlipwaveError, match="the coulomb law's posterior medians nor 20 draws"):
         simulated_law(_Solver(0.0), posterior, 80)  # type: ignore[arg-type]
+
+
+def _choice_between(evidence: dict[str, float], differs: dict[str, list[str]],
+                    monkeypatch: pytest.MonkeyPatch) -> tuple[procedure.Choice, list[str]]:
+    """choose_law over stand-in posteriors, whose predictive checks differ as given."""
+    checked: list[str] = []
+
+    def check(ensemble, posterior, members, seed, error):
+        checked.append(posterior.law)
+        return {name: {"agrees": name not in differs[posterior.law]}
+                for name in ("first_ratio", "recurrence_s")}
+
+    monkeypatch.setattr(procedure, "predictive_check", check)
+    posteriors = {law: SimpleNamespace(law=law, log_evidence=value)
+                  for law, value in evidence.items()}
+    fitted = procedure.TestFit(posteriors, {}, None, None, None, 0.0)  # type: ignore[arg-type]
+    return procedure.choose_law(fitted, FitSettings.from_values({})), checked
+
+
+def test_the_law_of_highest_evidence_is_chosen_when_its_predictive_agrees(monkeypatch):
+    choice, checked = _choice_between({"coulomb": -3.0, "run-in": -3.6},
+                                      {"coulomb": [], "run-in": []}, monkeypatch)
+    assert choice.posterior.law == "coulomb" and choice.reason == "the highest evidence"
+    assert checked == ["coulomb"]
+
+
+def test_a_law_whose_predictive_differs_gives_way_where_the_evidence_does_not_decide(
+        monkeypatch):
+    # the default campaign's hl025 (a run-in from 0.8 to 1.1): Coulomb's evidence e^0.5
+    # higher, its predictive differing on the first slip
+    choice, checked = _choice_between({"coulomb": -3.0, "run-in": -3.6, "slip-weakening": -5.5},
+                                      {"coulomb": ["first_ratio"], "run-in": [],
+                                       "slip-weakening": []}, monkeypatch)
+    assert choice.posterior.law == "run-in" and checked == ["coulomb", "run-in"]
+    assert "coulomb's posterior predictive differs on first_ratio" in choice.reason
+    assert "log Bayes factor -0.6" in choice.reason
+
+
+def test_a_law_the_evidence_substantially_disfavours_is_not_chosen_for_its_predictive(
+        monkeypatch):
+    # a calibration run-in whose own predictive differed, Coulomb's evidence e^2.2 lower:
+    # not rejected, but a right law's predictive fails in 5 % of tests by design
+    choice, checked = _choice_between({"coulomb": -6.35, "run-in": -4.18},
+                                      {"coulomb": [], "run-in": ["recurrence_s"]},
+                                      monkeypatch)
+    assert choice.posterior.law == "run-in" and checked == ["run-in"]
+    assert choice.reason.startswith("the highest evidence; no law's posterior predictive")
+    assert not choice.predictive["recurrence_s"]["agrees"]

@@ -229,7 +229,7 @@ def _fit(args: argparse.Namespace) -> None:
               f"{entry['guesses']} guesses, {entry['simulations']} simulations in "
               f"{seconds[law]:.0f} s")
     differs = [name for name, check in fit["predictive"].items() if not check["agrees"]]
-    print(f"{fit['chosen']} chosen; its posterior predictive "
+    print(f"{fit['chosen']} chosen ({fit['chosen_because']}); its posterior predictive "
           + (f"differs on {', '.join(differs)}" if differs else "agrees on every feature"))
     if finer is not None:
         changes = ", ".join(f"{name} {change:+.2%}" for name, change in finer["change"].items())

@@ -364,8 +364,9 @@ def pairing_summary(
     Returns
     -------
     dict
-        ``setup`` (rows with sources), ``laws`` (rows), ``chosen``, ``mesh_check``
-        (the chosen law at twice the mesh: :func:`mesh_check_rows`), ``comparison``
+        ``setup`` (rows with sources), ``laws`` (rows), ``chosen`` and
+        ``chosen_because`` (the law and why), ``mesh_check`` (the chosen law at twice
+        the mesh: :func:`mesh_check_rows`), ``comparison``
         (rows) and ``verdicts``, figures (matplotlib, drawn by
         :func:`render_test_page`: ``signals``, ``zooms``,
         ``ratios``, ``space_time``, ``frames``, ``map``), ``placement``, ``missing``
@@ -378,7 +379,8 @@ def pairing_summary(
     """
     missing: list[str] = []
     summary: dict[str, Any] = {
-        "setup": [], "laws": [], "chosen": None, "mesh_check": None, "comparison": [],
+        "setup": [], "laws": [], "chosen": None, "chosen_because": None, "mesh_check": None,
+        "comparison": [],
         "verdicts": {},
         "figures": dict.fromkeys(("signals", "zooms", "ratios", "space_time", "frames",
                                   "map")),
@@ -404,6 +406,7 @@ def pairing_summary(
                                          "value": setup[key]["value"],
                                          "source": setup[key]["source"]})
         summary["chosen"] = fit["chosen"]
+        summary["chosen_because"] = fit.get("chosen_because")
         summary["elements"] = fit.get("elements")
         summary["scatter_step"] = fit.get("load_calibration", SCATTER_STEP)
         for law, entry in fit["laws"].items():
