@@ -21,6 +21,9 @@ rule fit:
         mesh_check="on" if config["fit"]["mesh_check"] else "off",
         detection=detection_options,
         cache=cache_option(config),
+    # the longest jobs first (a minute or more each): the map's rows and the short stages
+    # fill the cores around them, instead of a last fit running alone
+    priority: 50
     threads: 1
     resources:
         mem_mb=scaled_memory(1500),
