@@ -209,8 +209,7 @@ class Surrogate:
 
     def _predicted(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The process's mean and standard deviation of the log distance at points."""
-        mean, sd = self.process.predict(scaled(points, self.box), return_std=True)
-        return mean, sd
+        return self.process.predict(scaled(points, self.box), return_std=True)
 
     def upper(self, points: np.ndarray, exploration: float) -> np.ndarray:
         """The log-likelihood's upper confidence bound (the distance's lower one).

@@ -743,9 +743,9 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         "source": f"slipwave {__version__} slipwave.solver.simulate",
         "element": "bilinear quadrilaterals, selective reduced integration, plane strain",
     }
-    # (fields, not asdict: its deep copies were a tenth of a map case's dataset)
-    slab_attrs = {f.name: getattr(slab, f.name) for f in fields(slab) if f.name != "profile"}
-    attrs.update({f"slab_{k}": v for k, v in slab_attrs.items()})
+    # (the fields read as they are: asdict would deep-copy them)
+    attrs.update({f"slab_{item.name}": getattr(slab, item.name) for item in fields(slab)
+                  if item.name != "profile"})
     attrs["slab_profile"] = "flat" if slab.profile is None else repr(slab.profile)
     attrs["friction_fs"] = run.friction.fs
     attrs["friction_fd"] = run.friction.dynamic
@@ -757,9 +757,8 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
     if run.friction.fs_final is not None:
         attrs["friction_fs_final"] = run.friction.fs_final
         attrs["friction_runin_slips"] = run.friction.runin_slips
-    for item in fields(path):
-        value = getattr(path, item.name)
-        attrs[f"path_{item.name}"] = "none" if value is None else value
+    attrs.update({f"path_{item.name}": "none" if getattr(path, item.name) is None
+                  else getattr(path, item.name) for item in fields(path)})
     attrs["gross_sliding"] = ("reached" if run.reached_gross else
                               "jammed: no further increment can make the whole contact slip"
                               if run.jammed else
