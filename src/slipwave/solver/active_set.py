@@ -1311,7 +1311,8 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
             s_prev: np.ndarray, static: float, dynamic: float, law: np.ndarray,
             guess: np.ndarray, guess_sign: np.ndarray, heal: bool, u: np.ndarray,
             r: np.ndarray, u_before: np.ndarray, r_before: np.ndarray, state: np.ndarray,
-            sign: np.ndarray, round_slipped: np.ndarray, scalars: np.ndarray) -> int:
+            sign: np.ndarray, direction: np.ndarray, round_slipped: np.ndarray,
+            scalars: np.ndarray) -> int:
     """Solve one increment by the active set, with the cascade when fs > fd.
 
     The body's :class:`ZoneSolver` and the increment's :class:`Flat` come as their
@@ -1343,9 +1344,10 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     u, r, u_before, r_before
         (2n,) filled with the displacements and the contact forces, and those of
         the stuck state before the wave.
-    state, sign, round_slipped
-        (n,) filled with the converged zone state, friction signs and the cascade
-        round in which each node started slipping (-1: it did not).
+    state, sign, direction, round_slipped
+        (n,) filled with the converged zone state, friction signs, the slipping nodes'
+        slip directions (the sign of ``ux - dx - s_prev``; 0 where not slipping) and
+        the cascade round in which each node started slipping (-1: it did not).
     scalars
         Filled with dx, dy, the flat's x before the wave, the residual, iterations.
 
@@ -1507,6 +1509,8 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     for i in range(n):
         limit[i] = wave_limit[i] if in_wave[i] else static
     dx, dy = flat_position[0], flat_position[1]
+    for i in range(n):
+        direction[i] = np.sign(u[i] - dx - s_prev[i]) if state[i] == SLIP else 0
     scalars[0] = dx
     scalars[1] = dy
     scalars[2] = dx_before if cascade else dx

@@ -321,17 +321,17 @@ class Body:
         start_sign = (np.ones(n) if guess_sign is None
                       else np.asarray(guess_sign, dtype=np.float64))
         u, r, u_before, r_before = np.empty((4, 2 * n))
-        state, sign = np.empty(n, dtype=np.int8), np.empty(n)
+        state, direction = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
+        sign = np.empty(n)
         round_slipped = np.empty(n, dtype=np.int16)
         scalars = np.empty(5)
         status = active_set.iterate(*self.zones, *control.flat, s_prev, float(static),
                                     float(dynamic), law, start, start_sign, heal, u, r,
-                                    u_before, r_before, state, sign, round_slipped, scalars)
+                                    u_before, r_before, state, sign, direction, round_slipped,
+                                    scalars)
         if status != active_set.CONVERGED:
             raise NotConverged(active_set.FAILURES[status])
         dx, dy, dx_before, residual, iterations = scalars.tolist()
-        ds = u[:n] - dx - s_prev
-        direction = np.where(state == SLIP, np.sign(ds), 0).astype(np.int8)
         return Increment(u=u, r=r, dx=dx, dy=dy, state=state, direction=direction,
                          round_slipped=round_slipped, iterations=int(iterations),
                          residual=residual, sign=sign, u_before=u_before,

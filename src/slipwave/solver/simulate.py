@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 import xarray as xr
@@ -217,6 +217,17 @@ class LoadPath:
                                 "travel_step")
 
 
+class _Step(NamedTuple):
+    """A recorded step: its increment, and what the driver adds to it."""
+
+    increment: Increment
+    slip: np.ndarray
+    phase: str
+    wave: str
+    static_friction: float
+    actuator: float
+
+
 @dataclass
 class _Run:
     """What the driver accumulates, step by step."""
@@ -227,7 +238,7 @@ class _Run:
     condensed: Condensed
     s_prev: np.ndarray
     slip: np.ndarray
-    steps: list[dict[str, Any]] = field(default_factory=list)
+    steps: list[_Step] = field(default_factory=list)
     guess: np.ndarray | None = None
     guess_sign: np.ndarray | None = None
     reached_gross: bool = False
@@ -292,7 +303,8 @@ class _Run:
 
     def _advance(self, increment: Increment) -> None:
         relative = increment.u[self.body.ix] - increment.dx
-        self.slip += relative - self.s_prev
+        # a new array, not an update in place: the steps keep the earlier ones
+        self.slip = self.slip + (relative - self.s_prev)
         self.s_prev = relative
         self.guess = increment.state
         self.guess_sign = increment.sign
@@ -305,59 +317,27 @@ class _Run:
         advanced: bool = False,
         actuator: float = float("nan"),
     ) -> None:
-        """Keep a step (``advanced``: the sub-stepping has already moved the state)."""
+        """Keep a step (``advanced``: the sub-stepping has already moved the state).
+
+        Only what the driver reads as it goes is worked out here (the step's wave);
+        the per-node fields and totals are formed for all steps at once in the
+        dataset (:func:`_to_dataset`).
+        """
         if not advanced:
             self._advance(increment)
-        width = self.slab.width
-        tributary = self.tributary
-        P, Q = increment.r[self.body.iy], increment.r[self.body.ix]
-        contact = increment.state != OPEN
+        if increment.u_before is None:  # no wave split off: the stuck state is the end's
+            increment.u_before, increment.r_before = increment.u, increment.r
+            increment.dx_before = increment.dx
+        elif increment.r_before is None:
+            increment.r_before = self.body.K @ increment.u_before
         wave = increment.round_slipped >= 0
         kind = "none"
         if wave.any():
+            contact = increment.state != OPEN
             kind = "gross" if contact.any() and wave[contact].all() else "partial"
-        sensors = self.condensed.sensors @ increment.u
-        u_before = increment.u if increment.u_before is None else increment.u_before
-        if u_before is increment.u:
-            before, r_before = sensors, increment.r
-        else:
-            before = self.condensed.sensors @ u_before
-            r_before = (self.body.K @ u_before if increment.r_before is None
-                        else increment.r_before)
-        n = self.body.n
         # (an increment's arrays are its own: kept without copies)
-        self.steps.append({
-            "ux": increment.u[:n],
-            "uy": increment.u[n:],
-            "ux_before_wave": u_before[:n],
-            "uy_before_wave": u_before[n:],
-            "T_before_wave": width * float(r_before[:n].sum()),
-            "N_before_wave": width * float(r_before[n:].sum()),
-            "DG_before_wave": float(before[0]),
-            "DD_before_wave": float(before[1]),
-            "DT_before_wave": increment.dx_before if increment.u_before is not None
-            else increment.dx,
-            "actuator": actuator,
-            "state": increment.state,
-            "slip_direction": increment.direction,
-            "cascade_round": increment.round_slipped,
-            "p": P / tributary,
-            "q": Q / tributary,
-            "gap": np.where(contact, 0.0, self.body.g0 + increment.u[self.body.iy] - increment.dy),
-            "slip": self.slip.copy(),
-            "T": width * float(Q.sum()),
-            "N": width * float(P.sum()),
-            "DG": float(sensors[0]),
-            "DD": float(sensors[1]),
-            "DT": increment.dx,
-            "approach": increment.dy,
-            "phase": phase,
-            "wave": kind,
-            "static_friction": self.friction.static_after(self.gross_slips),
-            "residual": increment.residual,
-            "iterations": increment.iterations,
-            "substeps": increment.substeps,
-        })
+        self.steps.append(_Step(increment, self.slip, phase, kind,
+                                self.friction.static_after(self.gross_slips), actuator))
 
     def count_gross(self) -> None:
         """After recording: one more gross slip if the last step was one."""
@@ -365,7 +345,19 @@ class _Run:
 
     @property
     def gross(self) -> bool:
-        return bool(self.steps) and self.steps[-1]["wave"] == "gross"
+        return bool(self.steps) and self.steps[-1].wave == "gross"
+
+    def tangential_load(self, step: _Step) -> float:
+        """A step's T (N, full width)."""
+        return self.slab.width * float(step.increment.r[self.body.ix].sum())
+
+    def tractions(self, step: _Step) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A step's pressure and shear (MPa) and gap (mm) at each node."""
+        increment = step.increment
+        contact = increment.state != OPEN
+        gap = np.where(contact, 0.0, self.body.g0 + increment.u[self.body.iy] - increment.dy)
+        return (increment.r[self.body.iy] / self.tributary,
+                increment.r[self.body.ix] / self.tributary, gap)
 
 
 def simulation_memory(slab: Slab, path: LoadPath, *, samples: float = 0.0,
@@ -471,7 +463,7 @@ def simulate(
     width = slab.width
 
     _normal_loading(run, path, cache)
-    held = run.steps[-1]["approach"]
+    held = run.steps[-1].increment.dy
     run.guess = run.guess_sign = None
 
     def hold(**motion: float) -> Control:
@@ -481,7 +473,7 @@ def simulate(
 
     # Tangential loading by load increments, until gross sliding, or until the
     # contact is found jammed (held normal displacement only: see _jammed).
-    start_T = run.steps[-1]["T"] / width
+    start_T = run.tangential_load(run.steps[-1]) / width
     step_travel = path.tangential_step / width / _stick_stiffness(body, path.normal_control)
     k = 1
     cap = path.max_tangential_load or np.inf
@@ -495,7 +487,7 @@ def simulate(
                 raise NotConverged("T beyond fs N: no equilibrium")
             run.record(run._attempt(control), "tangential")
         except NotConverged:
-            sliding = _sliding(run, control, run.steps[-1]["DT"] + step_travel)
+            sliding = _sliding(run, control, run.steps[-1].increment.dx + step_travel)
             if sliding is not None:
                 run.record(sliding, "tangential")
             else:
@@ -504,8 +496,8 @@ def simulate(
         k += 1
         if run.gross:
             break
-        if can_jam and (_jammed(run.steps[-3:], run.friction.fs)
-                        or run.steps[-1]["T"] >= ASYMPTOTIC_LOAD_RATIO * path.normal_load):
+        if can_jam and (_jammed(run, run.friction.fs) or run.tangential_load(run.steps[-1])
+                        >= ASYMPTOTIC_LOAD_RATIO * path.normal_load):
             run.jammed = True
             break
 
@@ -514,7 +506,7 @@ def simulate(
         _drive_through_machine(run, path, hold)
     elif path.max_travel is not None:
         travel_step = path.travel_step or step_travel
-        dx = run.steps[-1]["DT"]
+        dx = run.steps[-1].increment.dx
         while dx < path.max_travel - 1e-12 and len(run.steps) < path.max_steps:
             previous = hold(dx=dx)
             dx = min(dx + travel_step, path.max_travel)
@@ -536,7 +528,7 @@ def _normal_loading(run: _Run, path: LoadPath, cache: SolverCache | None) -> Non
     if kept is not None:
         steps, s_prev, slip = kept
         static = run.friction.static_after(0)
-        run.steps = [{**step, "static_friction": static} for step in steps]
+        run.steps = [step._replace(static_friction=static) for step in steps]
         run.s_prev, run.slip = s_prev.copy(), slip.copy()
         return
     previous = Control(dx=0.0, N=0.0)
@@ -547,15 +539,14 @@ def _normal_loading(run: _Run, path: LoadPath, cache: SolverCache | None) -> Non
         previous = control
     run.frictionless = False
     if not path.normal_friction and cache is not None:
-        cache.keep_approach(key, ([dict(step) for step in run.steps], run.s_prev.copy(),
-                                  run.slip.copy()))
+        cache.keep_approach(key, (list(run.steps), run.s_prev.copy(), run.slip.copy()))
 
 
 def _drive_through_machine(run: _Run, path: LoadPath, hold: Any) -> None:
     """The tangential phase driven by an actuator through the machine's spring."""
     assert path.machine_stiffness and path.max_travel and path.travel_step
     machine = path.machine_stiffness / run.slab.width
-    start = run.steps[-1]["T"] / run.slab.width  # the actuator starts where T is
+    start = run.tangential_load(run.steps[-1]) / run.slab.width  # the actuator starts where T is
     steps = int(np.ceil(path.max_travel / path.travel_step - 1e-9))
     previous = hold(T=start, machine=machine)
     for k in range(1, steps + 1):
@@ -593,7 +584,7 @@ def _may_jam(run: _Run) -> bool:
     return bool(limit.residual <= RESIDUAL_TOLERANCE and (limit.state == STICK).any())
 
 
-def _jammed(last: list[dict[str, Any]], fs: float) -> bool:
+def _jammed(run: _Run, fs: float) -> bool:
     """Whether the contact has jammed: its present zone state holds for every larger T.
 
     Over the last three steps the zone state (and slip directions) did not change,
@@ -604,18 +595,20 @@ def _jammed(last: list[dict[str, Any]], fs: float) -> bool:
     from its present value (below fs) towards |dq| / dp (below fs too), so it never
     reaches fs and no node can start slipping; the whole contact can never slip.
     """
-    if len(last) < 3:
+    if len(run.steps) < 3:
         return False
-    a, b, c = last
-    same = (np.array_equal(a["state"], b["state"]) and np.array_equal(b["state"], c["state"])
-            and np.array_equal(b["slip_direction"], c["slip_direction"]))
-    if not same or (c["wave"] != "none" and not (c["state"] == STICK).any()):
+    a, b, c = (step.increment for step in run.steps[-3:])
+    same = (np.array_equal(a.state, b.state) and np.array_equal(b.state, c.state)
+            and np.array_equal(b.direction, c.direction))
+    if not same or (run.steps[-1].wave != "none" and not (c.state == STICK).any()):
         return False
-    dp, dq = c["p"] - b["p"], c["q"] - b["q"]
-    if not np.allclose(dp, b["p"] - a["p"], rtol=1e-6, atol=1e-12):
+    (pa, _, _), (pb, qb, gap_b), (pc, qc, gap_c) = (run.tractions(step)
+                                                    for step in run.steps[-3:])
+    dp, dq = pc - pb, qc - qb
+    if not np.allclose(dp, pb - pa, rtol=1e-6, atol=1e-12):
         return False  # not yet linear
-    contact, stick = c["state"] != OPEN, c["state"] == STICK
-    dgap = c["gap"] - b["gap"]
+    contact, stick = c.state != OPEN, c.state == STICK
+    dgap = gap_c - gap_b
     margin = 1.0 - 1e-9
     return bool(stick.any() and (dp[contact] >= 0).all() and (dgap[~contact] >= 0).all()
                 and (np.abs(dq[stick]) < margin * fs * dp[stick]).all())
@@ -666,67 +659,82 @@ def _sliding(run: _Run, control: Control, dx_floor: float) -> Increment | None:
 def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
     steps = run.steps
     slab = run.slab
+    width, n = slab.width, run.body.n
+    increments = [step.increment for step in steps]
 
-    def stack(name: str) -> np.ndarray:
-        return np.stack([s[name] for s in steps])
+    def stacked(name: str) -> np.ndarray:
+        """An increment's field, for every step."""
+        return np.array([getattr(increment, name) for increment in increments])
 
-    def column(name: str) -> np.ndarray:
-        return np.array([s[name] for s in steps])
+    u, r, u_before, r_before = stacked("u"), stacked("r"), stacked("u_before"), stacked("r_before")
+    state = stacked("state")
+    dy = stacked("dy")
+    sensors = run.condensed.sensors
+    # a product per step, as each step alone would have it (a product of all steps at
+    # once rounds differently)
+    edges = np.array([sensors @ row for row in u])
+    edges_before = np.array([edges[k] if increment.u_before is increment.u
+                             else sensors @ u_before[k]
+                             for k, increment in enumerate(increments)])
+    before_wave = {
+        "T": width * r_before[:, :n].sum(axis=1), "N": width * r_before[:, n:].sum(axis=1),
+        "DG": edges_before[:, 0], "DD": edges_before[:, 1], "DT": stacked("dx_before"),
+    }
+    gap = np.where(state != OPEN, 0.0, run.body.g0 + u[:, n:] - dy[:, None])
 
     node = ("step", "x")
     data = {
-        "state": (node, stack("state").astype(np.int8), {
+        "state": (node, state.astype(np.int8), {
             "long_name": "contact state", "flag_values": np.array([0, 1, 2], dtype=np.int8),
             "flag_meanings": "open stick slip"}),
-        "slip_direction": (node, stack("slip_direction").astype(np.int8), {
+        "slip_direction": (node, stacked("direction").astype(np.int8), {
             "long_name": "sign of the slab's slip increment relative to the flat",
             "units": "1"}),
-        "cascade_round": (node, stack("cascade_round").astype(np.int16), {
+        "cascade_round": (node, stacked("round_slipped").astype(np.int16), {
             "long_name": "cascade round in which the node started slipping in this step "
                          "(-1: it did not)", "units": "1"}),
-        "p": (node, stack("p"), {"units": "MPa", "long_name": "contact pressure"}),
-        "q": (node, stack("q"), {"units": "MPa",
-                                 "long_name": "shear traction on the slab (positive along +x)"}),
-        "gap": (node, stack("gap"), {"units": "mm", "long_name": "normal gap"}),
-        "slip": (node, stack("slip"), {"units": "mm",
-                                       "long_name": "accumulated slip of the slab relative "
-                                                    "to the flat"}),
-        "ux": (node, stack("ux"), {"units": "mm",
-                                   "long_name": "tangential displacement of the contact nodes"}),
-        "uy": (node, stack("uy"), {"units": "mm",
-                                   "long_name": "normal displacement of the contact nodes"}),
-        "ux_before_wave": (node, stack("ux_before_wave"), {
+        "p": (node, r[:, n:] / run.tributary, {"units": "MPa", "long_name": "contact pressure"}),
+        "q": (node, r[:, :n] / run.tributary, {
+            "units": "MPa", "long_name": "shear traction on the slab (positive along +x)"}),
+        "gap": (node, gap, {"units": "mm", "long_name": "normal gap"}),
+        "slip": (node, np.array([step.slip for step in steps]), {
+            "units": "mm", "long_name": "accumulated slip of the slab relative to the flat"}),
+        "ux": (node, u[:, :n], {
+            "units": "mm", "long_name": "tangential displacement of the contact nodes"}),
+        "uy": (node, u[:, n:], {
+            "units": "mm", "long_name": "normal displacement of the contact nodes"}),
+        "ux_before_wave": (node, u_before[:, :n], {
             "units": "mm", "long_name": "ux in the stuck state of the step, before its wave"}),
-        "uy_before_wave": (node, stack("uy_before_wave"), {
+        "uy_before_wave": (node, u_before[:, n:], {
             "units": "mm", "long_name": "uy in the stuck state of the step, before its wave"}),
-        "T": ("step", column("T"), {"units": "N", "long_name": "tangential load"}),
-        "N": ("step", column("N"), {"units": "N", "long_name": "normal load",
-                                    "comment": "compressive load, positive"}),
-        "DG": ("step", column("DG"), {"units": "mm",
-                                      "long_name": "left-edge lateral displacement of the "
-                                                   "slab, 5 mm above the contact"}),
-        "DD": ("step", column("DD"), {"units": "mm",
-                                      "long_name": "right-edge lateral displacement of the "
-                                                   "slab, 5 mm above the contact"}),
-        "DT": ("step", column("DT"), {"units": "mm", "long_name": "flat displacement"}),
-        "approach": ("step", column("approach"), {"units": "mm",
-                                                  "long_name": "normal approach of the flat"}),
-        "actuator": ("step", column("actuator"), {
+        "T": ("step", width * r[:, :n].sum(axis=1), {
+            "units": "N", "long_name": "tangential load"}),
+        "N": ("step", width * r[:, n:].sum(axis=1), {
+            "units": "N", "long_name": "normal load", "comment": "compressive load, positive"}),
+        "DG": ("step", edges[:, 0], {
+            "units": "mm",
+            "long_name": "left-edge lateral displacement of the slab, 5 mm above the contact"}),
+        "DD": ("step", edges[:, 1], {
+            "units": "mm",
+            "long_name": "right-edge lateral displacement of the slab, 5 mm above the contact"}),
+        "DT": ("step", stacked("dx"), {"units": "mm", "long_name": "flat displacement"}),
+        "approach": ("step", dy, {"units": "mm", "long_name": "normal approach of the flat"}),
+        "actuator": ("step", np.array([step.actuator for step in steps]), {
             "units": "mm", "long_name": "actuator travel (machine drive; NaN otherwise)"}),
-        **{f"{name}_before_wave": ("step", column(f"{name}_before_wave"), {
+        **{f"{name}_before_wave": ("step", before_wave[name], {
             "units": units, "long_name": f"{name} in the stuck state of the step, before its "
             "wave (the peak)"}) for name, units in
             (("T", "N"), ("N", "N"), ("DG", "mm"), ("DD", "mm"), ("DT", "mm"))},
-        "phase": ("step", column("phase").astype(str), {"long_name": "load phase"}),
-        "wave": ("step", column("wave").astype(str), {
+        "phase": ("step", np.array([step.phase for step in steps]), {"long_name": "load phase"}),
+        "wave": ("step", np.array([step.wave for step in steps]), {
             "long_name": "nodes that slipped in the step: none, partial or gross (all)"}),
-        "static_friction": ("step", column("static_friction"), {
+        "static_friction": ("step", np.array([step.static_friction for step in steps]), {
             "units": "1", "long_name": "static friction coefficient in force during the step"}),
-        "residual": ("step", column("residual"), {
+        "residual": ("step", stacked("residual"), {
             "units": "1", "long_name": "relative complementarity residual"}),
-        "iterations": ("step", column("iterations").astype(np.int32), {
+        "iterations": ("step", stacked("iterations").astype(np.int32), {
             "units": "1", "long_name": "active-set iterations"}),
-        "substeps": ("step", column("substeps").astype(np.int32), {
+        "substeps": ("step", stacked("substeps").astype(np.int32), {
             "units": "1", "long_name": "parts the step was solved in (1: whole; more: "
                                        "sub-stepped, each part its own wave)"}),
     }

@@ -91,7 +91,7 @@ def zone_runs(codes: np.ndarray, spacing: float, min_size: float) -> list[tuple[
     runs = [[int(codes[a]), a, b] for a, b in zip(starts, ends, strict=True)]
     while len(runs) > 1:
         lengths = [(b - a + 1) * spacing for _, a, b in runs]
-        k = int(np.argmin(lengths))
+        k = min(range(len(runs)), key=lengths.__getitem__)  # the first shortest
         if lengths[k] >= min_size:
             break
         neighbours = [j for j in (k - 1, k + 1) if 0 <= j < len(runs)]
