@@ -145,3 +145,50 @@ def test_edge_jumps_of_either_sign_and_across_given_drops():
     at = edge_jumps(time, edge, at=drops)
     assert at["significant"].tolist() == [True, False, True]
     assert at["jump"].to_numpy() == pytest.approx([-0.2, 0.0, -0.3], abs=0.005)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(min_value=4, max_value=60), st.integers(min_value=0, max_value=2**31 - 1))
+def test_the_compiled_hinge_is_the_best_two_segment_line(size, seed):
+    """Each breakpoint's continuous two-segment line fitted by lstsq: the hinge's is the best."""
+    from slipwave.events.steps import _hinge
+
+    rng = np.random.default_rng(seed)
+    values = np.cumsum(rng.normal(size=size))
+    i = np.arange(size, dtype=float)
+    candidates = np.arange(1, size - 2)
+    residuals = []
+    for k in candidates:
+        basis = np.column_stack([np.ones(size), i, np.maximum(i - k, 0.0)])
+        fit = np.linalg.lstsq(basis, values, rcond=None)[0]
+        residuals.append(float(np.sum((values - basis @ fit) ** 2)))
+    best = _hinge(values, candidates)
+    assert residuals[best - 1] <= min(residuals) * (1 + 1e-9) + 1e-12
+    with pytest.raises(ValueError, match="breakpoints"):
+        _hinge(values, np.array([size]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(min_value=1, max_value=40), st.integers(min_value=-3, max_value=45),
+       st.integers(min_value=0, max_value=2**31 - 1))
+def test_the_compiled_line_is_the_least_squares_line(size, at, seed):
+    from slipwave.events.steps import _line_at
+
+    values = np.random.default_rng(seed).normal(size=size) + 0.3 * np.arange(size)
+    if size < 3:  # too short for a line: the nearest sample
+        expected = values[min(max(at, 0), size - 1)]
+    else:
+        slope, intercept = np.polyfit(np.arange(size, dtype=float), values, 1)
+        expected = intercept + slope * at
+    assert _line_at(values, at) == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+def test_window_median_skips_non_finite_samples_and_thins_long_windows():
+    from slipwave.events.steps import window_median
+
+    values = np.array([5.0, np.nan, 1.0, np.inf, 3.0, 2.0])
+    assert window_median(values, 0, 6) == np.median([5.0, 1.0, 3.0, 2.0])  # 2.5
+    assert window_median(values, -4, 3) == 3.0  # clipped to the signal: 5 and 1
+    assert np.isnan(window_median(values, 1, 2)) and np.isnan(window_median(values, 4, 4))
+    long = np.arange(10_001, dtype=float)
+    assert window_median(long, 0, long.size) == np.median(long[::10])

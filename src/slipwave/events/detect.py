@@ -467,7 +467,6 @@ def detect_events(
         result[f"{channel}_jump"] = found["jump"].to_numpy()
     with np.errstate(divide="ignore", invalid="ignore"):
         result["edge_ratio"] = result["DG_jump"] / result["DD_jump"]
-    result = result.astype({"i_start": np.int64, "i_end": np.int64})
     result.attrs.update(
         warnings="\n".join(warnings),
         edge_convention=convention or "",

@@ -354,30 +354,55 @@ def _hinge(values: np.ndarray, candidates: np.ndarray) -> int:
     """Breakpoint of the best continuous two-segment line through ``values`` (least squares).
 
     ``values[i] = a + b i + c max(i - k, 0)`` for each breakpoint ``k`` of
-    ``candidates``; returns the best ``k``. The ramp ``max(i - k, 0)`` is projected
-    off the straight line's basis, and the sums this needs come from suffix sums:
-    every breakpoint together costs O(n).
+    ``candidates`` (each below ``values.size``); returns the best ``k``.
+    """
+    if candidates.size == 0 or candidates.min() < 0 or candidates.max() >= values.size:
+        raise ValueError(f"hinge breakpoints must lie in [0, {values.size})")
+    return int(_best_hinge(np.asarray(values, dtype=np.float64),
+                           np.asarray(candidates, dtype=np.int64)))
+
+
+@njit(cache=True)
+def _best_hinge(values: np.ndarray, candidates: np.ndarray) -> int:
+    """:func:`_hinge`, compiled: every fall of every ensemble member places two.
+
+    The ramp ``max(i - k, 0)`` is projected off the straight line's basis, and the
+    sums this needs come from suffix sums: every breakpoint together costs O(n).
     """
     n = values.size
-    centre = 0.5 * (n - 1)
-    i = np.arange(n, dtype=float) - centre  # centred: 1 and i are orthogonal
-    ii = float(i @ i)
-    line = values.mean() + (i @ values) / ii * i
-    residual = values - line  # what the straight line leaves
-
-    def after(terms: np.ndarray) -> np.ndarray:  # sums over samples past each candidate
-        suffix = np.concatenate([np.cumsum(terms[::-1])[::-1], [0.0]])
-        return suffix[candidates + 1]
-
-    k = candidates.astype(float) - centre
-    s0 = (n - 1 - candidates).astype(float)
-    s1, s2 = after(i), after(i * i)
-    ramp_sum, ramp_i = s1 - k * s0, s2 - k * s1
-    ramp_norm = s2 - 2 * k * s1 + k * k * s0 - ramp_sum**2 / n - ramp_i**2 / ii
-    ramp_residual = after(residual) * -k + after(i * residual)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        gain = np.where(ramp_norm > 1e-9, ramp_residual**2 / ramp_norm, 0.0)
-    return int(candidates[int(np.argmax(gain))])
+    centre = 0.5 * (n - 1)  # centred: 1 and i are orthogonal
+    ii = 0.0
+    iv = 0.0
+    total = 0.0
+    for j in range(n):
+        i = j - centre
+        ii += i * i
+        iv += i * values[j]
+        total += values[j]
+    mean, slope = total / n, iv / ii
+    # sums over the samples past each index of i, i^2, and of the residual r the
+    # straight line leaves and i r
+    after_i, after_ii = np.zeros(n + 1), np.zeros(n + 1)
+    after_r, after_ir = np.zeros(n + 1), np.zeros(n + 1)
+    for j in range(n - 1, -1, -1):
+        i = j - centre
+        r = values[j] - (mean + slope * i)
+        after_i[j] = after_i[j + 1] + i
+        after_ii[j] = after_ii[j + 1] + i * i
+        after_r[j] = after_r[j + 1] + r
+        after_ir[j] = after_ir[j + 1] + i * r
+    best, best_gain = candidates[0], -np.inf
+    for candidate in candidates:
+        k = candidate - centre
+        s0 = n - 1.0 - candidate
+        s1, s2 = after_i[candidate + 1], after_ii[candidate + 1]
+        ramp_sum, ramp_i = s1 - k * s0, s2 - k * s1
+        ramp_norm = s2 - 2 * k * s1 + k * k * s0 - ramp_sum**2 / n - ramp_i**2 / ii
+        ramp_residual = after_ir[candidate + 1] - k * after_r[candidate + 1]
+        gain = ramp_residual**2 / ramp_norm if ramp_norm > 1e-9 else 0.0
+        if gain > best_gain:  # the first of equal gains, as argmax
+            best, best_gain = candidate, gain
+    return best
 
 
 def refine_step(
@@ -440,12 +465,24 @@ def refine_step(
     return start + onset, start + end, peak, trough
 
 
+@njit(cache=True)
 def _line_at(values: np.ndarray, at: int) -> float:
     """The least-squares straight line through ``values``, evaluated at index ``at``."""
-    if values.size < 3:
-        return float(values[min(max(at, 0), values.size - 1)])
-    slope, intercept = np.polyfit(np.arange(values.size, dtype=float), values, 1)
-    return float(intercept + slope * at)
+    n = values.size
+    if n < 3:
+        return values[min(max(at, 0), n - 1)]
+    centre = 0.5 * (n - 1)
+    total = 0.0
+    for j in range(n):
+        total += values[j]
+    mean = total / n
+    ii = 0.0
+    iv = 0.0
+    for j in range(n):
+        i = j - centre
+        ii += i * i
+        iv += i * (values[j] - mean)
+    return mean + iv / ii * (at - centre)
 
 
 def _without_spikes(values: np.ndarray, max_spike: int) -> np.ndarray:
@@ -652,9 +689,15 @@ def window_median(values: np.ndarray, first: int, last: int) -> float:
 
     """
     first, last = max(first, 0), min(last, values.size)
-    segment = values[first:last:max(1, (last - first) // 1000)]
-    segment = segment[np.isfinite(segment)]
-    return float(np.median(segment)) if segment.size else np.nan
+    return float(_finite_median(np.asarray(values[first:last:max(1, (last - first) // 1000)],
+                                           dtype=np.float64)))
+
+
+@njit(cache=True)
+def _finite_median(segment: np.ndarray) -> float:
+    """The median of the finite values of ``segment``, NaN if there are none."""
+    finite = segment[np.isfinite(segment)]
+    return np.median(finite) if finite.size else np.nan
 
 
 def _changes_at(time: np.ndarray, values: np.ndarray, drops: pd.DataFrame, *, size: float,
@@ -676,8 +719,11 @@ def _changes_at(time: np.ndarray, values: np.ndarray, drops: pd.DataFrame, *, si
                      min(before, after), abs(jump), time[end] - time[middle], before, after,
                      jump, abs(jump) >= size))
     columns = [*STEP_COLUMNS, "before", "after", "jump", "significant"]
-    table = pd.DataFrame(rows, columns=columns)
-    return table.astype({"i_start": np.int64, "i_end": np.int64, "significant": bool})
+    kinds = {"i_start": np.int64, "i_end": np.int64, "significant": bool}
+    # made with their types (a table's astype costs more than the table)
+    by_column = list(zip(*rows, strict=True)) if rows else [()] * len(columns)
+    return pd.DataFrame({name: np.array(column, dtype=kinds.get(name, np.float64))
+                         for name, column in zip(columns, by_column, strict=True)})
 
 
 def edge_jumps(
