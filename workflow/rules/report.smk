@@ -21,8 +21,9 @@ rule report:
     params:
         video=video_options,
         pairing=pairing_options,
-    # the figures are drawn on the job's cores (most of a report's time)
-    threads: 2
+    # one core: a second draws the figures no faster (7.4 s against 7.6 s for a bench
+    # test), and a report asking for two waits for a fit to end instead of running beside it
+    threads: 1
     resources:
         mem_mb=scaled_memory(3000),
         runtime=15,

@@ -351,13 +351,16 @@ class _Run:
         """A step's T (N, full width)."""
         return self.slab.width * float(step.increment.r[self.body.ix].sum())
 
-    def tractions(self, step: _Step) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """A step's pressure and shear (MPa) and gap (mm) at each node."""
-        increment = step.increment
-        contact = increment.state != OPEN
-        gap = np.where(contact, 0.0, self.body.g0 + increment.u[self.body.iy] - increment.dy)
-        return (increment.r[self.body.iy] / self.tributary,
-                increment.r[self.body.ix] / self.tributary, gap)
+    def contact_fields(self, u: np.ndarray, r: np.ndarray, dy: float | np.ndarray,
+                       state: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pressure and shear (MPa) and gap (mm) at each node, of a step or of steps stacked.
+
+        ``u``, ``r`` (..., 2n), ``dy`` (...) and ``state`` (..., n): one step's, or every
+        step's in rows.
+        """
+        n = self.body.n
+        gap = np.where(state != OPEN, 0.0, self.body.g0 + u[..., n:] - np.asarray(dy)[..., None])
+        return r[..., n:] / self.tributary, r[..., :n] / self.tributary, gap
 
 
 def simulation_memory(slab: Slab, path: LoadPath, *, samples: float = 0.0,
@@ -602,8 +605,8 @@ def _jammed(run: _Run, fs: float) -> bool:
             and np.array_equal(b.direction, c.direction))
     if not same or (run.steps[-1].wave != "none" and not (c.state == STICK).any()):
         return False
-    (pa, _, _), (pb, qb, gap_b), (pc, qc, gap_c) = (run.tractions(step)
-                                                    for step in run.steps[-3:])
+    (pa, _, _), (pb, qb, gap_b), (pc, qc, gap_c) = (
+        run.contact_fields(made.u, made.r, made.dy, made.state) for made in (a, b, c))
     dp, dq = pc - pb, qc - qb
     if not np.allclose(dp, pb - pa, rtol=1e-6, atol=1e-12):
         return False  # not yet linear
@@ -680,7 +683,7 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         "T": width * r_before[:, :n].sum(axis=1), "N": width * r_before[:, n:].sum(axis=1),
         "DG": edges_before[:, 0], "DD": edges_before[:, 1], "DT": stacked("dx_before"),
     }
-    gap = np.where(state != OPEN, 0.0, run.body.g0 + u[:, n:] - dy[:, None])
+    pressure, shear, gap = run.contact_fields(u, r, dy, state)
 
     node = ("step", "x")
     data = {
@@ -693,8 +696,8 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
         "cascade_round": (node, stacked("round_slipped").astype(np.int16), {
             "long_name": "cascade round in which the node started slipping in this step "
                          "(-1: it did not)", "units": "1"}),
-        "p": (node, r[:, n:] / run.tributary, {"units": "MPa", "long_name": "contact pressure"}),
-        "q": (node, r[:, :n] / run.tributary, {
+        "p": (node, pressure, {"units": "MPa", "long_name": "contact pressure"}),
+        "q": (node, shear, {
             "units": "MPa", "long_name": "shear traction on the slab (positive along +x)"}),
         "gap": (node, gap, {"units": "mm", "long_name": "normal gap"}),
         "slip": (node, np.array([step.slip for step in steps]), {
