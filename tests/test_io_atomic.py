@@ -66,3 +66,49 @@ def test_a_stale_part_of_the_same_output_is_removed(tmp_path):
         temporary.write_bytes(b"whole")
     assert not stale.exists() and other.exists()
     assert (tmp_path / "rec.nc").read_bytes() == b"whole"
+
+
+_STALLED_UNWIND = """
+import argparse, sys, threading, time
+from pathlib import Path
+from slipwave import cli
+from slipwave.io import atomic_output
+
+cli.UNWIND_SECONDS = 1.0
+lock = threading.Lock()
+
+
+def write(args):
+    with atomic_output(Path(sys.argv[1]) / "rec.nc") as part:
+        part.write_bytes(b"half")
+        print("writing", flush=True)
+        try:
+            time.sleep(60)
+        finally:  # a clean-up that never ends: a lock the interrupted code still holds
+            lock.acquire()
+            lock.acquire()
+
+
+class Parser:
+    def parse_args(self, argv):
+        return argparse.Namespace(run=write)
+
+
+cli.build_parser = Parser
+sys.exit(cli.main([]))
+"""
+
+
+def test_a_stalled_unwinding_after_sigterm_still_ends_and_leaves_nothing(tmp_path):
+    """The watchdog ends a command whose clean-up hangs, its part file removed."""
+    process = subprocess.Popen([sys.executable, "-c", _STALLED_UNWIND, str(tmp_path)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert process.stdout.readline() == "writing\n"
+    assert len(list(tmp_path.glob(".rec.nc.*.part"))) == 1
+    started = time.monotonic()
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 130, err
+    assert "nothing half-written was kept (the clean-up had not ended 1 s" in err
+    assert time.monotonic() - started < 10
+    assert list(tmp_path.iterdir()) == []

@@ -17,6 +17,7 @@ import argparse
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -24,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 from slipwave import __version__
 from slipwave import defaults as default
 from slipwave.errors import SlipwaveError, warning_lines
+from slipwave.io.atomic import remove_pending_parts
 
 if TYPE_CHECKING:
     from slipwave.events import DetectionSettings
@@ -1121,10 +1123,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+UNWIND_SECONDS = 15.0
+"""After SIGTERM, how long the command may take to unwind before it removes its part
+files itself and ends (a scheduler sends SIGKILL some 30 s or more after SIGTERM)."""
+
+
 def _terminate(signum: int, frame: object) -> None:
     # SIGTERM (a scheduler's or Snakemake's stop) unwinds like Ctrl-C: every output being
-    # written is removed by its atomic_output on the way out.
+    # written is removed by its atomic_output on the way out. Should the unwinding stall
+    # (CI once saw an ingest still running 60 s after the signal, its write interrupted
+    # inside the netCDF library), a watchdog ends the process in its place.
+    watchdog = threading.Timer(UNWIND_SECONDS, _give_up)
+    watchdog.daemon = True
+    watchdog.start()
     raise KeyboardInterrupt
+
+
+def _give_up() -> None:
+    """End the process now: the part files of its writes removed, exit status 130."""
+    remove_pending_parts()
+    # os.write: the main thread, stuck, may hold sys.stderr's lock
+    os.write(2, (f"slipwave: interrupted; nothing half-written was kept (the clean-up had "
+                 f"not ended {UNWIND_SECONDS:g} s after the signal)\n").encode())
+    os._exit(130)
 
 
 def _crash_log(err: BaseException) -> Path:

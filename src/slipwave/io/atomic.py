@@ -14,6 +14,8 @@ from pathlib import Path
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 
+_PENDING: set[Path] = set()  # the part files of this process's writes under way
+
 
 def _host() -> str:
     """The machine's name, as a ``.part`` file's name holds it (no dot, no dash)."""
@@ -109,16 +111,40 @@ def atomic_output(path: str | PathLike[str]) -> Iterator[Path]:
     # The name is drawn before the file exists, so that an interrupt (SIGTERM arrives
     # as KeyboardInterrupt) just after its creation still finds it in ``finally``.
     temporary = _part_name(target)
+    _PENDING.add(temporary)
     try:
         while True:
             try:
                 os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
                 break
             except FileExistsError:  # another write's file: draw again
+                _PENDING.discard(temporary)
                 temporary = _part_name(target)
+                _PENDING.add(temporary)
         yield temporary
         temporary.chmod(0o666 & ~_UMASK)  # created 0600; outputs follow the umask
         os.replace(temporary, target)
     finally:
         temporary.unlink(missing_ok=True)
+        _PENDING.discard(temporary)
+
+
+def remove_pending_parts() -> list[Path]:
+    """Remove the part files of this process's writes under way, as it gives up.
+
+    For a process that must end at once without unwinding (the ``slipwave`` command
+    when unwinding after SIGTERM does not end in time): its :func:`atomic_output`
+    blocks will not run their own clean-up.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+
+    """
+    removed = []
+    for part in list(_PENDING):
+        part.unlink(missing_ok=True)
+        removed.append(part)
+    return removed
 
