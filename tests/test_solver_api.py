@@ -204,9 +204,12 @@ def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys):
     assert main(["compile", "-o", str(out)]) == 0
     report = json.loads(out.read_text())
     assert {"iterate", "move_to", "set_base", "solve", "residual"} <= set(report["kernels"])
-    for kernel in report["kernels"].values():
+    assert {"_despiked", "_best_hinge", "_line_at", "_finite_median",
+            "_lowest_before_rise"} == set(report["detection"]["kernels"])
+    for kernel in [*report["kernels"].values(), *report["detection"]["kernels"].values()]:
         assert kernel["loaded"] + kernel["compiled"] >= 1 and kernel["cache_path"]
-    assert "kernels" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "solver: " in out and "detection: 5 kernels" in out
 
 
 @pytest.mark.parametrize("spread", [1e9, 1e11])

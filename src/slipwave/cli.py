@@ -309,17 +309,21 @@ def _fits(args: argparse.Namespace) -> None:
 def _compile(args: argparse.Namespace) -> None:
     import json
 
+    from slipwave.events.compiled import compile_detection
     from slipwave.io import atomic_output
     from slipwave.solver.compiled import compile_solver
 
     report = compile_solver()
+    report["detection"] = compile_detection()
     with atomic_output(args.output) as temporary:
         temporary.write_text(json.dumps(report, indent=2) + "\n")
-    kernels = report["kernels"].values()
-    compiled = sum(kernel["compiled"] for kernel in kernels)
-    print(f"solver: {len(report['kernels'])} kernels, {compiled} compiled now and "
-          f"{sum(kernel['loaded'] for kernel in kernels)} loaded from the disk cache, in "
-          f"{report['seconds']:.1f} s -> {args.output}")
+    for name, part in (("solver", report), ("detection", report["detection"])):
+        kernels = part["kernels"].values()
+        print(f"{name}: {len(kernels)} kernels, "
+              f"{sum(kernel['compiled'] for kernel in kernels)} compiled now and "
+              f"{sum(kernel['loaded'] for kernel in kernels)} loaded from the disk cache, in "
+              f"{part['seconds']:.1f} s")
+    print(f"-> {args.output}")
 
 
 def _summary(args: argparse.Namespace) -> None:
@@ -1023,9 +1027,9 @@ def build_parser() -> argparse.ArgumentParser:
     fits.set_defaults(run=_fits)
 
     compiling = commands.add_parser(
-        "compile", help="compile the solver once (numba's disk cache), before the jobs "
-        "that need it", description="Compile every kernel of the solver, or load it from "
-        "the disk cache, and report which (JSON).")
+        "compile", help="compile the solver and the detection once (numba's disk cache), "
+        "before the jobs that need them", description="Compile every kernel of the solver "
+        "and of the detection, or load it from the disk cache, and report which (JSON).")
     compiling.add_argument("-o", "--output", type=Path, required=True, help="JSON to write")
     compiling.set_defaults(run=_compile)
 

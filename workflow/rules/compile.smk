@@ -1,10 +1,12 @@
-# The solver compiled once, first: jobs that start together on an empty numba cache
-# would each compile it. The rules that simulate take its report as an ancient()
-# input: a new report does not make them run again.
+# The solver and the detection compiled once, first: jobs that start together on an
+# empty numba cache would each compile them (the first two fits both compiled the
+# detection's kernels, 3 s each). The rules that simulate take its report as an
+# ancient() input: a new report does not make them run again.
 
 
 rule compile:
-    """The solver's kernels compiled (or loaded from numba's disk cache)."""
+    """The solver's and the detection's kernels compiled (or loaded from numba's disk
+    cache)."""
     output:
         "results/solver.json",
     log:

@@ -689,8 +689,9 @@ def window_median(values: np.ndarray, first: int, last: int) -> float:
 
     """
     first, last = max(first, 0), min(last, values.size)
-    return float(_finite_median(np.asarray(values[first:last:max(1, (last - first) // 1000)],
-                                           dtype=np.float64)))
+    # contiguous: a thinned window would otherwise compile a second kernel
+    return float(_finite_median(np.ascontiguousarray(
+        values[first:last:max(1, (last - first) // 1000)], dtype=np.float64)))
 
 
 @njit(cache=True)
