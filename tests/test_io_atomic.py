@@ -81,8 +81,8 @@ lock = threading.Lock()
 def write(args):
     with atomic_output(Path(sys.argv[1]) / "rec.nc") as part:
         part.write_bytes(b"half")
-        print("writing", flush=True)
-        try:
+        try:  # (said inside: a signal that came before the try would skip the finally)
+            print("writing", flush=True)
             time.sleep(60)
         finally:  # a clean-up that never ends: a lock the interrupted code still holds
             lock.acquire()
