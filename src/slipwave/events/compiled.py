@@ -11,11 +11,11 @@ from __future__ import annotations
 import time
 from typing import Any
 
-import numba
 import numpy as np
 
 from slipwave.events import steps
 from slipwave.events.steps import edge_jumps, load_drops
+from slipwave.kernels import cache_report
 
 
 def compile_detection() -> dict[str, Any]:
@@ -45,12 +45,4 @@ def compile_detection() -> dict[str, Any]:
     edge = 0.1 * np.floor(time_s / 10.0) + rng.normal(0.0, 1e-4, time_s.size)
     drops = load_drops(time_s, load)
     edge_jumps(time_s, edge, at=drops)
-    kernels = {}
-    for name in dir(steps):
-        kernel = getattr(steps, name)
-        if isinstance(kernel, numba.core.registry.CPUDispatcher) and kernel.signatures:
-            stats = kernel.stats
-            kernels[name] = {"cache_path": str(stats.cache_path),
-                             "loaded": sum(stats.cache_hits.values()),
-                             "compiled": sum(stats.cache_misses.values())}
-    return {"seconds": round(time.perf_counter() - start, 3), "kernels": kernels}
+    return {"seconds": round(time.perf_counter() - start, 3), "kernels": cache_report(steps)}

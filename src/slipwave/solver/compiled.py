@@ -14,6 +14,7 @@ from typing import Any
 
 import numba
 
+from slipwave.kernels import cache_report
 from slipwave.solver import active_set
 from slipwave.solver.simulate import Coulomb, LoadPath, SlipWeakening, simulate
 from slipwave.solver.slab import Slab
@@ -50,13 +51,5 @@ def compile_solver() -> dict[str, Any]:
         simulate(slab, Coulomb(fs=0.5), LoadPath(normal_control="force",
                                                  normal_friction=friction))
     simulate(slab, Coulomb(fs=0.5), LoadPath(normal_control="displacement", max_travel=0.2))
-    kernels = {}
-    for name in dir(active_set):
-        kernel = getattr(active_set, name)
-        if isinstance(kernel, numba.core.registry.CPUDispatcher) and kernel.signatures:
-            stats = kernel.stats
-            kernels[name] = {"cache_path": str(stats.cache_path),
-                             "loaded": sum(stats.cache_hits.values()),
-                             "compiled": sum(stats.cache_misses.values())}
     return {"seconds": round(time.perf_counter() - start, 3), "numba": numba.__version__,
-            "kernels": kernels}
+            "kernels": cache_report(active_set)}
