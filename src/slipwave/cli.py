@@ -25,7 +25,6 @@ from typing import TYPE_CHECKING, Any
 from slipwave import __version__
 from slipwave import defaults as default
 from slipwave.errors import SlipwaveError, warning_lines
-from slipwave.io.atomic import remove_pending_parts
 
 if TYPE_CHECKING:
     from slipwave.events import DetectionSettings
@@ -1145,7 +1144,11 @@ def _terminate(signum: int, frame: object) -> None:
 
 def _give_up() -> None:
     """End the process now: the part files of its writes removed, exit status 130."""
-    remove_pending_parts()
+    # read where loaded, not imported: importing slipwave.io costs the command line its
+    # light start, and a process that never loaded it has no part files
+    atomic = sys.modules.get("slipwave.io.atomic")
+    if atomic is not None:
+        atomic.remove_pending_parts()
     # os.write: the main thread, stuck, may hold sys.stderr's lock
     os.write(2, (f"slipwave: interrupted; nothing half-written was kept (the clean-up had "
                  f"not ended {UNWIND_SECONDS:g} s after the signal)\n").encode())
