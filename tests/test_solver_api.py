@@ -15,6 +15,7 @@ from slipwave.plot import plot_zones
 from slipwave.solver import Body, Coulomb, LoadPath, Slab, SolverCache, active_set, simulate
 from slipwave.solver import contact as contact_module
 from slipwave.solver import slab as slab_module
+from slipwave.solver.compiled import CALLEE_GROUPS
 
 
 def test_a_cache_condenses_a_geometry_once_and_a_store_keeps_it_across_caches(
@@ -197,12 +198,14 @@ def test_simulate_refuses_silly_travel(tmp_path, capsys, option, message):
                     for k in range(len(option) // 2)})
 
 
-def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys):
+@pytest.mark.parametrize("processes", ["1", "2"])
+def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys, processes):
     import json
 
     out = tmp_path / "solver.json"
-    assert main(["compile", "-o", str(out)]) == 0
+    assert main(["compile", "-o", str(out), "--processes", processes]) == 0
     report = json.loads(out.read_text())
+    assert report["processes"] == int(processes)
     assert {"iterate", "move_to", "set_base", "solve", "residual"} <= set(report["kernels"])
     assert {"_despiked", "_best_hinge", "_line_at", "_finite_median",
             "_lowest_before_rise"} == set(report["detection"]["kernels"])
@@ -210,6 +213,42 @@ def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys):
         assert kernel["loaded"] + kernel["compiled"] >= 1 and kernel["cache_path"]
     out = capsys.readouterr().out
     assert "solver: " in out and "detection: 5 kernels" in out
+
+
+def test_the_callee_groups_share_out_every_callee_of_the_increment():
+    body = active_set.zone_solver(np.eye(4), np.zeros(2))
+    names = {name for name, _ in active_set.callee_examples(body, np.array([0.9, 0.6, 0.1]))}
+    assert set().union(*CALLEE_GROUPS) == names
+    assert not set(CALLEE_GROUPS[0]) & set(CALLEE_GROUPS[1])
+
+
+_CALLEES_FIRST = """
+import json, sys
+from slipwave.solver.compiled import CALLEE_GROUPS, compile_callees, compile_solver
+if sys.argv[1] == "callees":
+    for group in CALLEE_GROUPS:
+        compile_callees(group)
+else:
+    print(json.dumps(compile_solver()["kernels"]))
+"""
+
+
+@pytest.mark.slow
+def test_callees_compiled_first_leave_the_increment_alone_to_compile(tmp_path):
+    # Their example arguments must have the types the increment calls them with: a
+    # callee it calls otherwise would be compiled again here, by the last process.
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    for step in ("callees", "increment"):
+        out = subprocess.run([sys.executable, "-c", _CALLEES_FIRST, step], env=env,
+                             check=True, capture_output=True, text=True).stdout
+    kernels = json.loads(out.strip().splitlines()[-1])
+    assert {name for name, kernel in kernels.items() if kernel["compiled"]} == {"iterate"}
+    assert kernels["move_to"]["loaded"] >= 1 and kernels["solve"]["loaded"] >= 1
 
 
 @pytest.mark.parametrize("spread", [1e9, 1e11])

@@ -308,12 +308,10 @@ def _fits(args: argparse.Namespace) -> None:
 def _compile(args: argparse.Namespace) -> None:
     import json
 
-    from slipwave.events.compiled import compile_detection
+    from slipwave.compilation import compile_kernels
     from slipwave.io import atomic_output
-    from slipwave.solver.compiled import compile_solver
 
-    report = compile_solver()
-    report["detection"] = compile_detection()
+    report = compile_kernels(args.processes)
     with atomic_output(args.output) as temporary:
         temporary.write_text(json.dumps(report, indent=2) + "\n")
     for name, part in (("solver", report), ("detection", report["detection"])):
@@ -1030,6 +1028,9 @@ def build_parser() -> argparse.ArgumentParser:
         "before the jobs that need them", description="Compile every kernel of the solver "
         "and of the detection, or load it from the disk cache, and report which (JSON).")
     compiling.add_argument("-o", "--output", type=Path, required=True, help="JSON to write")
+    compiling.add_argument("--processes", type=int, choices=(1, 2), default=1,
+                           help="compile on two processes: the solver's callees side by "
+                           "side, then its increment beside the detection")
     compiling.set_defaults(run=_compile)
 
     summary = commands.add_parser(

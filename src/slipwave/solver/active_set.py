@@ -43,7 +43,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 OPEN, STICK, SLIP = 0, 1, 2
 
@@ -1520,3 +1520,60 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
         _copy(u_before, u)
         _copy(r_before, r)
     return CONVERGED
+
+
+
+def callee_examples(body: ZoneSolver, law: np.ndarray) -> list[tuple[str, tuple]]:
+    """Arguments typed as :func:`iterate` passes them to its callees.
+
+    numba compiles a callee once for each set of argument types and caches it;
+    compiled first from these (in other processes, in parallel), the callees are
+    loaded when :func:`iterate` is compiled, which then optimises its own code alone
+    (about a quarter of the solver's compilation). Should :func:`iterate` call one
+    with other types, that callee is compiled again with it: slower, never wrong.
+
+    Parameters
+    ----------
+    body
+        A body's solver (:func:`zone_solver`), any size.
+    law
+        A slip-weakening law ``[fs, fd, Dc]``.
+
+    Returns
+    -------
+    list
+        Pairs of a callee's name and a tuple of arguments of the types :func:`iterate`
+        gives it, or of those types (a callee called with several types comes once
+        for each).
+
+    """
+    n = body.g0.size
+    fl = flat(None, 0.0, 1.0, None, 1.0)
+    state = np.full(n, STICK, dtype=np.int8)
+    vector = np.zeros(n)
+    work = np.zeros((6, n))
+    forces = np.zeros(2 * n)
+    flags = np.zeros(n, dtype=np.bool_)
+    return [
+        ("set_base", (body, vector)),
+        ("move_to", (body, state, vector)),
+        ("solve", (body, fl, forces, forces)),
+        ("residual", (body, fl, forces, forces, 0.0, 0.0, vector, vector)),
+        ("_classify", (body.g0, body.K, forces, forces, 0.0, 0.0, vector, vector, flags, True,
+                       work, state, flags)),
+        ("_predict", (state, state, flags, work, flags, True)),
+        ("_keep_one_stuck", (state, flags, work)),
+        ("_weakened_limits", (state, flags, work, vector, law, 0.5, 0.9)),
+        ("_weakening_newton", (body, fl, state, vector, work[1], work[3], vector, vector, law,
+                               0.5, 0.9)),
+        ("_aitken", (work[:3], 0.5, 0.9)),
+        ("_same", (state, state)),
+        ("_same", (vector, vector)),
+        # iterate's count of seen guesses: numba types it as the literal it starts at
+        # and as an integer
+        ("_seen", (np.zeros((2, n), dtype=np.int8), work[:2], types.literal(0), state,
+                   vector)),
+        ("_seen", (np.zeros((2, n), dtype=np.int8), work[:2], 0, state, vector)),
+        ("_copy", (state, state)),
+        ("_copy", (vector, vector)),
+    ]

@@ -10,14 +10,54 @@ them once, so that the workflow's first rule does it and the others load them.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numba
+import numpy as np
 
 from slipwave.kernels import cache_report
 from slipwave.solver import active_set
 from slipwave.solver.simulate import Coulomb, LoadPath, SlipWeakening, simulate
 from slipwave.solver.slab import Slab
+
+CALLEE_GROUPS = (("move_to",), ("solve", "_weakening_newton", "set_base", "residual",
+                                 "_classify", "_predict", "_keep_one_stuck",
+                                 "_weakened_limits", "_aitken", "_same", "_seen", "_copy"))
+"""The callees of :func:`slipwave.solver.active_set.iterate` in two shares of about equal
+compilation time (the kept inverse's updates; the solves, the weakening and the rest),
+for two processes to compile side by side before ``iterate`` is."""
+
+
+def compile_callees(names: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """Compile these callees of ``iterate`` with the types it calls them with.
+
+    One process's share (:data:`CALLEE_GROUPS`) of the solver's compilation, cached on
+    disk for the process that compiles ``iterate`` (:func:`compile_solver`) to load.
+
+    Parameters
+    ----------
+    names
+        Functions of :mod:`slipwave.solver.active_set`.
+
+    Returns
+    -------
+    dict
+        This process's :func:`~slipwave.kernels.cache_report` of the solver's kernels.
+
+    Examples
+    --------
+    >>> kernel = compile_callees(["_same"])["_same"]
+    >>> kernel["loaded"] + kernel["compiled"] >= 2  # once for int8 states, once for signs
+    True
+    """
+    body = active_set.zone_solver(np.eye(16), np.zeros(8))
+    for name, arguments in active_set.callee_examples(body, np.array([0.9, 0.6, 0.05])):
+        if name in names:
+            signature = tuple(a if isinstance(a, numba.types.Type) else numba.typeof(a)
+                              for a in arguments)
+            getattr(active_set, name).compile(signature)
+    return cache_report(active_set)
 
 
 def compile_solver() -> dict[str, Any]:
