@@ -12,16 +12,14 @@ export PATH := $(BIN):$(PATH)
 
 install: $(STAMP)
 
-# --no-compile: Python writes the bytecode of the modules a run imports as it imports
-# them; pip's compiling of every installed module was half the install's time (16 of 32 s).
 $(RUN_STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet --no-compile -e .
+	$(BIN)/python -m pip install --quiet -e .
 	touch $(RUN_STAMP)
 
 $(STAMP): $(RUN_STAMP)
-	$(BIN)/python -m pip install --quiet --no-compile -e '.[test,docs]'
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
 
 # What pip cannot install: Debian's Chromium and poppler-utils, with which the tests look

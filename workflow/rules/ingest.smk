@@ -8,6 +8,9 @@ rule ingest:
         "results/logs/ingest/{test_id}.log",
     params:
         columns=lambda wildcards: column_pairs(config, test_row(wildcards)["columns"]),
+    # above the fits' (50): the fits need it, and it would otherwise wait behind the
+    # map's rows that become ready with it when the compile rule ends
+    priority: 60
     threads: 1
     resources:
         mem_mb=scaled_memory(500),
