@@ -12,7 +12,9 @@ rule compile:
         "results/solver.json",
     log:
         "results/logs/compile.log",
-    priority: 100
+    # above two ingests' (60 each): Snakemake's scheduler maximises the sum of the
+    # priorities of the jobs it starts together, and this one takes both cores
+    priority: 200
     threads: 2
     resources:
         mem_mb=scaled_memory(1000),
