@@ -207,12 +207,13 @@ def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys, proce
     report = json.loads(out.read_text())
     assert report["processes"] == int(processes)
     assert {"iterate", "move_to", "set_base", "solve", "residual"} <= set(report["kernels"])
-    assert {"_despiked", "_best_hinge", "_line_at", "_finite_median",
-            "_lowest_before_rise"} == set(report["detection"]["kernels"])
+    # the kernels called from Python (their callees show only when compiled here)
+    assert {"_despiked", "_best_hinge", "_line_at", "_finite_median", "_lowest_before_rise",
+            "_level_falls"} <= set(report["detection"]["kernels"])
     for kernel in [*report["kernels"].values(), *report["detection"]["kernels"].values()]:
         assert kernel["loaded"] + kernel["compiled"] >= 1 and kernel["cache_path"]
     out = capsys.readouterr().out
-    assert "solver: " in out and "detection: 5 kernels" in out
+    assert "solver: " in out and "detection: " in out
 
 
 def test_the_callee_groups_share_out_every_callee_of_the_increment():

@@ -180,22 +180,8 @@ def _fall_pairs(smooth: np.ndarray, threshold: float, *, block: int, max_duratio
     scale = 1
     while level.size > _LAG:
         for lag in _LAGS:  # a short lag sees drops that a fast ramp would hide from a long one
-            fall = level[:-lag] - level[lag:]
-            marked = np.flatnonzero(fall > threshold)
-            if not marked.size:
-                continue
-            # runs of marked positions (gaps shorter than the lag bridged), one per fall
-            breaks = np.flatnonzero(np.diff(marked) > lag)
-            firsts = marked[np.concatenate([[0], breaks + 1])]
-            lasts = marked[np.concatenate([breaks, [marked.size - 1]])]
-            for first, last in zip(firsts, lasts, strict=True):
-                top = first + int(np.argmax(level[first : last + 1]))
-                bottom = top + int(np.argmin(level[top : last + lag + 1]))
-                top, bottom = top * scale, max(bottom, top + 1) * scale
-                if not seen[top : bottom + 1].all():  # not a piece of a fall seen already
-                    whole = _whole_fall(smooth, top, bottom, threshold)
-                    seen[whole[0] : whole[1] + 1] = True
-                    levels.append(whole)
+            wholes = _level_falls(level, smooth, seen, scale, lag, threshold)
+            levels.extend((int(top), int(bottom)) for top, bottom in wholes)
         if _LAG * scale * 2 * block > max_duration or level.size < 2 * (_LAG + 1):
             break
         even = level.size // 2 * 2
@@ -248,11 +234,6 @@ def _fall_pairs(smooth: np.ndarray, threshold: float, *, block: int, max_duratio
     return pairs, loading / block
 
 
-def _turn(values: np.ndarray, swing: float) -> int:
-    """Index of the lowest value of ``values`` before they rise by more than ``swing``."""
-    return int(_lowest_before_rise(values, swing)[0])
-
-
 @njit(cache=True)
 def _lowest_before_rise(values: np.ndarray, swing: float) -> tuple[int, bool]:
     """Where ``values`` are lowest before they first rise by more than ``swing``.
@@ -275,6 +256,78 @@ def _lowest_before_rise(values: np.ndarray, swing: float) -> tuple[int, bool]:
     return best, end < values.size
 
 
+@njit(cache=True)
+def _level_falls(level: np.ndarray, smooth: np.ndarray, seen: np.ndarray, scale: int,
+                 lag: int, threshold: float) -> np.ndarray:
+    """The whole falls that one level of the pyramid sees over ``lag`` blocks.
+
+    A fall is a run of positions where the level falls by more than ``threshold``
+    over the lag (gaps shorter than the lag bridged), from its highest value to its
+    lowest within the lag after it; one that is not a piece of a fall already
+    ``seen`` (in the signal's blocks, marked here) is extended to its whole
+    (:func:`_whole_fall`). Compiled: a fit's every member runs it on every level.
+
+    Parameters
+    ----------
+    level
+        The level: the signal averaged over ``scale`` blocks.
+    smooth
+        The signal, in blocks.
+    seen
+        Which blocks a fall already covers; updated.
+    scale
+        Blocks per value of the level.
+    lag
+        Values of the level over which a fall is measured.
+    threshold
+        The smallest fall, and the swing that ends a fall's whole.
+
+    Returns
+    -------
+    numpy.ndarray
+        (falls, 2): each whole fall's first and last block, in the order found.
+
+    """
+    wholes = np.empty((0, 2), dtype=np.int64)
+    count = 0
+    first = -1
+    last = -1
+    for k in range(level.size - lag + 1):
+        marked = k < level.size - lag and level[k] - level[k + lag] > threshold
+        if marked and first >= 0 and k - last <= lag:
+            last = k
+            continue
+        if first >= 0 and (marked or k == level.size - lag):
+            top = first
+            for j in range(first, last + 1):
+                if level[j] > level[top]:
+                    top = j
+            bottom = top
+            for j in range(top, min(last + lag + 1, level.size)):
+                if level[j] < level[bottom]:
+                    bottom = j
+            bottom = max(bottom, top + 1) * scale
+            top *= scale
+            covered = True
+            for j in range(top, min(bottom + 1, seen.size)):
+                covered = covered and seen[j]
+            if not covered:  # not a piece of a fall seen already
+                start, end = _whole_fall(smooth, top, bottom, threshold)
+                seen[start : end + 1] = True
+                if count == wholes.shape[0]:
+                    grown = np.empty((max(8, 2 * count), 2), dtype=np.int64)
+                    grown[:count] = wholes[:count]
+                    wholes = grown
+                wholes[count, 0] = start
+                wholes[count, 1] = end
+                count += 1
+            first = -1
+        if marked:
+            first = last = k
+    return wholes[:count]
+
+
+@njit(cache=True)
 def _whole_fall(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tuple[int, int]:
     """The whole fall a piece ``(top, bottom)`` belongs to.
 
@@ -287,14 +340,14 @@ def _whole_fall(smooth: np.ndarray, top: int, bottom: int, swing: float) -> tupl
     reach = 4 * span
     while True:
         start = max(0, top - reach)
-        back = _turn(-smooth[start : top + 1][::-1], swing)
+        back = _lowest_before_rise(-smooth[start : top + 1][::-1], swing)[0]
         if back < top - start or start == 0:
             break
         reach *= 4
     reach = 4 * span
     while True:
         stop = min(smooth.size, bottom + reach)
-        on = _turn(smooth[bottom:stop], swing)
+        on = _lowest_before_rise(smooth[bottom:stop], swing)[0]
         if on < stop - bottom - 1 or stop == smooth.size:
             break
         reach *= 4
