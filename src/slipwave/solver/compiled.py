@@ -43,21 +43,29 @@ def compile_callees(names: Sequence[str]) -> dict[str, dict[str, Any]]:
     Returns
     -------
     dict
-        This process's :func:`~slipwave.kernels.cache_report` of the solver's kernels.
+        The :func:`~slipwave.kernels.cache_report` of the kernels this call compiled or
+        loaded (their callees among them).
 
     Examples
     --------
-    >>> kernel = compile_callees(["_same"])["_same"]
-    >>> kernel["loaded"] + kernel["compiled"] >= 2  # once for int8 states, once for signs
-    True
+    >>> report = compile_callees(["_same"])  # for the zone states, and for the signs
+    >>> report["_same"]["loaded"] + report["_same"]["compiled"]
+    2
     """
+    before = cache_report(active_set)
     body = active_set.zone_solver(np.eye(16), np.zeros(8))
     for name, arguments in active_set.callee_examples(body, np.array([0.9, 0.6, 0.05])):
         if name in names:
             signature = tuple(a if isinstance(a, numba.types.Type) else numba.typeof(a)
                               for a in arguments)
             getattr(active_set, name).compile(signature)
-    return cache_report(active_set)
+    # this call's part (a process may take several shares)
+    after = cache_report(active_set)
+    for name, kernel in after.items():
+        for count in ("loaded", "compiled"):
+            kernel[count] -= before.get(name, {}).get(count, 0)
+    return {name: kernel for name, kernel in after.items()
+            if kernel["loaded"] or kernel["compiled"]}
 
 
 def compile_solver() -> dict[str, Any]:
