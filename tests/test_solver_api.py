@@ -198,14 +198,14 @@ def test_simulate_refuses_silly_travel(tmp_path, capsys, option, message):
                     for k in range(len(option) // 2)})
 
 
-@pytest.mark.parametrize("processes", ["1", "2"])
+@pytest.mark.parametrize("processes", ["1", "2", "8"])
 def test_compile_reports_every_kernel_called_from_python(tmp_path, capsys, processes):
     import json
 
     out = tmp_path / "solver.json"
     assert main(["compile", "-o", str(out), "--processes", processes]) == 0
     report = json.loads(out.read_text())
-    assert report["processes"] == int(processes)
+    assert report["processes"] == min(int(processes), 2)
     assert {"iterate", "move_to", "set_base", "solve", "residual"} <= set(report["kernels"])
     # the kernels called from Python (their callees show only when compiled here)
     assert {"_despiked", "_best_hinge", "_line_at", "_finite_median", "_lowest_before_rise",

@@ -1028,9 +1028,10 @@ def build_parser() -> argparse.ArgumentParser:
         "before the jobs that need them", description="Compile every kernel of the solver "
         "and of the detection, or load it from the disk cache, and report which (JSON).")
     compiling.add_argument("-o", "--output", type=Path, required=True, help="JSON to write")
-    compiling.add_argument("--processes", type=int, choices=(1, 2), default=1,
-                           help="compile on two processes: the solver's callees side by "
-                           "side, then its increment beside the detection")
+    compiling.add_argument("--processes", type=_positive_int, default=1,
+                           help="processes to compile on; two (more gain nothing): the "
+                           "solver's callees side by side, then its increment beside the "
+                           "detection")
     compiling.set_defaults(run=_compile)
 
     summary = commands.add_parser(

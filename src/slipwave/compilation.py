@@ -24,8 +24,8 @@ def compile_kernels(processes: int = 1) -> dict[str, Any]:
     Parameters
     ----------
     processes
-        Processes to compile on: 1, or 2 (more gain nothing: the solver's compilation
-        splits in two shares, then its increment, beside the detection).
+        Processes to compile on; more than 2 gain nothing (the solver's compilation
+        splits in two shares, then its increment, beside the detection) and count as 2.
 
     Returns
     -------
