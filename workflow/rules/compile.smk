@@ -2,7 +2,7 @@
 # empty numba cache would each compile them (the first two fits both compiled the
 # detection's kernels, 3 s each). The rules that simulate take its report as an
 # ancient() input: a new report does not make them run again. Two threads: the solver's
-# callees compile side by side (the stage's 27 s fell to 17 s on two cores).
+# callees compile side by side, then the increment beside the detection.
 
 
 rule compile:

@@ -288,7 +288,7 @@ def _level_falls(level: np.ndarray, smooth: np.ndarray, seen: np.ndarray, scale:
         (falls, 2): each whole fall's first and last block, in the order found.
 
     """
-    wholes = np.empty((0, 2), dtype=np.int64)
+    wholes = np.empty((level.size, 2), dtype=np.int64)  # at most a fall per position
     count = 0
     first = -1
     last = -1
@@ -308,16 +308,9 @@ def _level_falls(level: np.ndarray, smooth: np.ndarray, seen: np.ndarray, scale:
                     bottom = j
             bottom = max(bottom, top + 1) * scale
             top *= scale
-            covered = True
-            for j in range(top, min(bottom + 1, seen.size)):
-                covered = covered and seen[j]
-            if not covered:  # not a piece of a fall seen already
+            if not seen[top : bottom + 1].all():  # not a piece of a fall seen already
                 start, end = _whole_fall(smooth, top, bottom, threshold)
                 seen[start : end + 1] = True
-                if count == wholes.shape[0]:
-                    grown = np.empty((max(8, 2 * count), 2), dtype=np.int64)
-                    grown[:count] = wholes[:count]
-                    wholes = grown
                 wholes[count, 0] = start
                 wholes[count, 1] = end
                 count += 1

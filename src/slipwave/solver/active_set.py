@@ -1529,7 +1529,6 @@ def iterate(K: np.ndarray, KT: np.ndarray, g0: np.ndarray, sum_x: np.ndarray,
     return CONVERGED
 
 
-
 def callee_examples(body: ZoneSolver, law: np.ndarray) -> list[tuple[str, tuple]]:
     """Arguments typed as :func:`iterate` passes them to its callees.
 
