@@ -12,7 +12,16 @@ from slipwave.cli import main
 from slipwave.errors import SlipwaveError, SolverError
 from slipwave.io import read_dataset
 from slipwave.plot import plot_zones
-from slipwave.solver import Body, Coulomb, LoadPath, Slab, SolverCache, active_set, simulate
+from slipwave.solver import (
+    Body,
+    Coulomb,
+    LoadPath,
+    Slab,
+    SlipWeakening,
+    SolverCache,
+    active_set,
+    simulate,
+)
 from slipwave.solver import contact as contact_module
 from slipwave.solver import slab as slab_module
 from slipwave.solver.compiled import CALLEE_GROUPS
@@ -68,6 +77,36 @@ def test_a_cache_keeps_the_frictionless_approach_and_gives_the_same_results():
     for name in ("T", "N", "DG", "DD", "state", "q"):
         np.testing.assert_array_equal(kept[name].values, first[name].values)
         np.testing.assert_array_equal(afresh[name].values, first[name].values)
+
+
+def test_a_kept_body_restarted_gives_what_a_new_one_does():
+    # the kept body's inverse is left as the last run left it: every simulation after
+    # the first must still equal one made with a body of its own, to the bit
+    slab = Slab(height=40.0, elements=24)
+    runs = [(Coulomb(fs=0.9, fd=0.6), LoadPath(max_travel=1.0)),
+            (SlipWeakening(fs=1.0, fd=0.7, dc=0.05), LoadPath(max_travel=1.0)),
+            (Coulomb(fs=0.5), LoadPath(normal_control="force")),
+            (Coulomb(fs=0.9, fd=0.6), LoadPath(max_travel=1.0))]
+    cache = SolverCache()
+    made = []
+    original = Body.__init__
+
+    def counted(body, *args, **kwargs):
+        made.append(body)
+        original(body, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Body, "__init__", counted)
+        kept = [simulate(slab, law, path, cache=cache) for law, path in runs]
+        assert len(made) == 1
+        curved = dataclasses.replace(slab, profile=lambda x: 1e-3 * (x / 10.0) ** 2)
+        kept.append(simulate(curved, Coulomb(fs=0.5), LoadPath(), cache=cache))
+        assert len(made) == 2  # another gap, another body
+    runs.append((Coulomb(fs=0.5), LoadPath()))
+    for k, ((law, path), ds) in enumerate(zip(runs, kept, strict=True)):
+        afresh = simulate(curved if k == len(runs) - 1 else slab, law, path)
+        for name in ("T", "N", "DG", "DD", "state", "q", "p", "slip", "iterations"):
+            np.testing.assert_array_equal(ds[name].values, afresh[name].values)
 
 
 def test_damaged_store_file_is_rebuilt(tmp_path):

@@ -198,6 +198,31 @@ def zone_solver(stiffness: np.ndarray, initial_gap: np.ndarray) -> ZoneSolver:
     return solver
 
 
+def restart(solver: ZoneSolver) -> None:
+    """Put a :class:`ZoneSolver` back, in place, to the state :func:`zone_solver` makes.
+
+    Every node stuck and nothing factorised, as a new one would be, to the bit: a
+    process that simulates one slab many times (a map row, a fit) keeps its solver
+    and restarts it rather than allocate and zero another. The inverse and the free
+    displacements' columns are left as they are: the kernels write each entry of
+    the present size's block before they read it.
+
+    Parameters
+    ----------
+    solver
+        Its stiffness and gaps are kept; its zone state is reset.
+
+    """
+    n2 = solver.K.shape[0]
+    for kept in (solver.coefficient, solver.dofs, solver.counts, solver.pending_u,
+                 solver.pending_v, solver.responses, solver.accuracy):
+        kept.fill(0)
+    solver.position.fill(-1)
+    solver.base[: n2 // 2] = 0.0
+    solver.base[n2 // 2 :] = -solver.g0
+    _refresh_known(solver)
+
+
 def flat(dx: float | None, dy: float | None, T: float | None, N: float | None,
          machine: float) -> Flat:
     """The compiled kernels' form of what is prescribed of the flat.

@@ -1,4 +1,4 @@
-"""What a process's simulations share: condensed slabs and frictionless approaches.
+"""What a process's simulations share: condensed slabs, their bodies, frictionless approaches.
 
 A :class:`SolverCache` is owned by whoever runs many simulations of the same slab (a
 map row, a fit, the command line's process) and handed to :func:`~slipwave.solver.condense`
@@ -8,6 +8,8 @@ first out:
 - the condensed matrices of a slab's geometry and mesh, for E = 1
   (:func:`~slipwave.solver.slab.geometry_key`), and, through ``store``, on disk
   across processes (:class:`slipwave.cache.DiskCache`);
+- a slab's body (:class:`~slipwave.solver.contact.Body`, its condensation for its
+  Young's modulus and gaps), restarted by each simulation rather than made again;
 - the steps of a frictionless normal approach, which do not depend on the friction
   law, so that a map row or a fit presses the flat once.
 
@@ -27,6 +29,8 @@ CONDENSATIONS_KEPT = 32
 """Geometries kept in memory (a map's 12 H/L values fit)."""
 APPROACHES_KEPT = 4
 """Frictionless normal approaches kept in memory."""
+BODIES_KEPT = 4
+"""Bodies kept in memory (each holds two (2n, 2n) working arrays beside its stiffness)."""
 
 
 class SolverCache:
@@ -51,6 +55,7 @@ class SolverCache:
         self.store = store
         self._condensed: OrderedDict[str, Condensed] = OrderedDict()
         self._approaches: OrderedDict[Hashable, Any] = OrderedDict()
+        self._bodies: OrderedDict[Hashable, Any] = OrderedDict()
 
     def __len__(self) -> int:
         return len(self._condensed)
@@ -112,6 +117,29 @@ class SolverCache:
 
         """
         _keep(self._approaches, key, approach, APPROACHES_KEPT)
+
+
+    def body(self, key: Hashable, make: Callable[[], Any]) -> Any:
+        """A kept body, or the one ``make`` returns, kept under ``key``.
+
+        Parameters
+        ----------
+        key
+            What the body is computed from.
+        make
+            Computes it on a miss.
+
+        Returns
+        -------
+        object
+            What ``make`` returned, now or earlier: the caller restarts it.
+
+        """
+        found = self._bodies.get(key)
+        if found is None:
+            found = make()
+        _keep(self._bodies, key, found, BODIES_KEPT)
+        return found
 
 
 def _keep(entries: OrderedDict[Any, Any], key: Hashable, value: Any, kept: int) -> None:

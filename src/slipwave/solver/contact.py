@@ -133,6 +133,10 @@ class Body:
         self.sum_x = self.zones.sum_x  # sum Q = sum_x @ u
         self.sum_y = self.zones.sum_y
 
+    def restart(self) -> None:
+        """Every node stuck again and nothing factorised, as the body was made."""
+        active_set.restart(self.zones)
+
     def work(self) -> dict[str, int]:
         """What the kept zone state has done so far (as ``cache_info``).
 
