@@ -173,7 +173,8 @@ def _case(ds: xr.Dataset, behaviour: Any, seconds: float) -> dict[str, Any]:
         "ratio_at_gross": np.nan if behaviour.ratio_at_gross is None
         else behaviour.ratio_at_gross,
         "steps": int(ds.sizes["step"]),
-        "max_residual": float(ds["residual"].max()),
+        # (from the variable: a DataArray's max() cost 0.2 ms, 3 % of a case)
+        "max_residual": float(ds.variables["residual"].values.max()),
         "seconds": seconds,
     }
 

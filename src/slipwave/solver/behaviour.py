@@ -224,10 +224,11 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
     ('ZD', True)
 
     """
-    x = ds["x"].values
-    phase = ds["phase"].values
-    wave = ds["wave"].values
-    T, N = ds["T"].values, ds["N"].values
+    # the arrays read from the variables: ds[name] would make a DataArray of each
+    values = {name: ds.variables[name].values for name in (
+        "x", "phase", "wave", "T", "N", "state", "slip_direction")}
+    x, phase, wave = values["x"], values["phase"], values["wave"]
+    T, N = values["T"], values["N"]
     normal_end = int(np.flatnonzero(phase == "normal")[-1])
     tangential = np.flatnonzero(phase == "tangential")
     gross = tangential[wave[tangential] == "gross"]
@@ -240,7 +241,7 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
     # The zone history from the end of the normal loading to the step before gross
     # sliding (at gross sliding every contact node slips: one zone, nothing to read).
     window = np.arange(normal_end, last)
-    codes = node_conditions(ds["state"].values[window], ds["slip_direction"].values[window])
+    codes = node_conditions(values["state"][window], values["slip_direction"][window])
     if not _approach_had_friction(ds):
         # A frictionless approach leaves every node sliding freely: the tangential
         # loading starts from a clean interface, friction engaging everywhere.
