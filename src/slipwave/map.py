@@ -15,7 +15,7 @@ from __future__ import annotations
 import time
 from collections import Counter
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -33,8 +33,12 @@ from slipwave.defaults import (
     MIN_ZONE_MM,
 )
 from slipwave.errors import SlipwaveError
-from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, condense, simulate
-from slipwave.solver.behaviour import ZD, ZG, describe_behaviour
+
+if TYPE_CHECKING:
+    from slipwave.solver import LoadPath, SolverCache
+
+# The solver (numba, scipy: 0.4 s to import) is imported where cases are simulated: the
+# Snakefile and `slipwave map assemble` import this module only to plan and join the map.
 
 PAPER_HEIGHT_RATIOS = MAP_HEIGHT_RATIOS
 """The paper's slab slendernesses H/L (the map's default)."""
@@ -92,6 +96,9 @@ def map_row(
     'opening right -> slip zone from right edge sweeps right-to-left -> gross sliding'
 
     """
+    from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, condense, simulate
+    from slipwave.solver.behaviour import describe_behaviour
+
     path = path or LoadPath(normal_control=MAP_NORMAL_CONTROL,  # type: ignore[arg-type]
                             normal_friction=MAP_NORMAL_FRICTION)
     slab = Slab(length=length, height=height_ratio * length, elements=elements)
@@ -596,6 +603,8 @@ def simulate_case(whole: xr.Dataset, height_ratio: float, friction: float, *,
         From :func:`~slipwave.solver.simulate`.
 
     """
+    from slipwave.solver import Coulomb, LoadPath, Slab, simulate
+
     attrs = whole.attrs
     length = float(attrs["contact_length_mm"])
     slab = Slab(length=length, height=height_ratio * length,
@@ -672,8 +681,6 @@ PAPER_FRICTIONS = tuple(friction_grid(*MAP_FRICTIONS).tolist())
 __all__ = [
     "PAPER_FRICTIONS",
     "PAPER_HEIGHT_RATIOS",
-    "ZD",
-    "ZG",
     "assemble_map",
     "behaviour_legend",
     "contiguity",
