@@ -315,3 +315,19 @@ def test_an_ill_conditioned_state_is_not_inverted_afresh_at_every_solve(spread):
     assert rebuilds[-1] == rebuilds[0]  # the later solves refine, they do not rebuild
     # the well-conditioned state met REFINE_ABOVE; the other found what it can reach
     assert (solver.accuracy[0] > active_set.REFINE_ABOVE) == (spread > 1e10)
+
+
+def test_a_singular_zone_state_is_refused_and_nothing_kept():
+    # node 0 slipping frees its x displacement, whose equation K[0] - mu K[2] has no
+    # entry on it when mu is 0: the bordering's pivot vanishes, and so does LAPACK's
+    # (the rebuild), which says so (numba raises LinAlgError) rather than keep an
+    # inverse of nothing
+    stiffness = np.array([[0.0, 0.0, 0.5, 0.0], [0.0, 1.0, 0.0, 0.0],
+                          [0.5, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    solver = active_set.zone_solver(stiffness, np.zeros(2))
+    state = np.array([active_set.SLIP, active_set.STICK], dtype=np.int8)
+    assert not active_set.move_to(solver, state, np.array([0.0, 0.0]))
+    assert solver.counts[0] == 0 and (solver.position == -1).all()
+    # a regular state afterwards is taken: its inverse is 1 / (0 - 0.5 * 0.5)
+    assert active_set.move_to(solver, state, np.array([0.5, 0.0]))
+    assert solver.counts[0] == 1 and solver.inverse[0, 0] == pytest.approx(-4.0)

@@ -77,9 +77,15 @@ it in one pass: a free displacement added costs one read of the inverse, not a r
 and a rewrite."""
 ROW_CHANGE_COST = 1.7
 """A row's new coefficient (Sherman-Morrison) in units of m^2 of :func:`move_to`'s cost
-model, where a rebuild is 2 m^3: measured inside compiled code, 70 rows changed at m 90
-took 0.16 ms and a rebuild 0.26 ms (45 at m 65: 0.06 and 0.11 ms). A cascade changes
+model, where a free displacement added or removed is 4 m^2: measured inside compiled
+code, 70 rows changed at m 90 took 0.16 ms (45 at m 65: 0.06 ms). A cascade changes
 the coefficient of every node in its wave, and slip-weakening at each of its steps."""
+REBUILD_COST = 1.0
+"""A rebuild (M formed and inverted by LAPACK, its known products made afresh) in units
+of m^3 of the same model, plus 12 n^2. Set on slip-weakening runs, where most rebuilds
+and row changes are (40 at 80 elements, 4 at 160): 0.6, 1.0, 1.2 and 1.4 took 7.7, 7.2,
+7.3 and 7.4 s at 80 elements, 5.9, 5.8, 6.3 and 7.2 s at 160. (Timed alone, a rebuild
+at n 161 cost as much as 26 row changes at m 80 and 60 at m 170.)"""
 # The known displacements' product is updated by the nodes whose s_prev moved, and
 # made afresh every this many increments: the updates' rounding does not build up.
 _REFRESH_EVERY = 256
@@ -534,8 +540,8 @@ def _refresh_known(s: ZoneSolver) -> None:
 def _lu_solve(A: np.ndarray, B: np.ndarray) -> bool:
     """Solve ``A X = B`` in place (X in B, A destroyed): Gaussian elimination, partial pivoting.
 
-    False if a pivot vanishes (A singular) or the result is not finite. numba's own
-    ``np.linalg`` would do, at several times the compilation.
+    False if a pivot vanishes (A singular) or the result is not finite. For the small
+    systems of the weakening's Newton step (a rebuild's inverse is LAPACK's).
     """
     n = A.shape[0]
     k = B.shape[1]
@@ -598,10 +604,14 @@ def _rebuild(s: ZoneSolver, dofs: np.ndarray, coefficients: np.ndarray) -> bool:
             M[p, q] = K[dofs[p], dofs[q]]
             if coefficients[p] != 0.0:
                 M[p, q] -= coefficients[p] * K[n + dofs[p], dofs[q]]
-    inverse = np.zeros((m, m))
-    for p in range(m):
-        inverse[p, p] = 1.0
-    if not _lu_solve(M, inverse):
+    # LAPACK's (getrf, getri): about three times the speed of an elimination of our own
+    # at m 175, where a slip-weakening wave changes most rows at once
+    try:
+        inverse = np.linalg.inv(M)
+        regular = np.isfinite(inverse).all()
+    except Exception:  # numba raises LinAlgError for an exactly singular M
+        regular = False
+    if not regular:
         s.counts[SIZE] = 0  # nothing usable is kept
         for p in range(m):
             s.position[dofs[p]] = -1
@@ -674,10 +684,10 @@ def move_to(s: ZoneSolver, state: np.ndarray, mu: np.ndarray) -> bool:
     if updates == 0:
         return True
     # a free displacement added or removed costs about 4 m^2, a row's new coefficient
-    # ROW_CHANGE_COST m^2, and a rebuild 2 m^3 + 12 n^2 (its known products)
+    # ROW_CHANGE_COST m^2, and a rebuild REBUILD_COST m^3 + 12 n^2 (its known products)
     largest = max(m, dofs.size)
     cost = (4.0 * (removals + additions) + ROW_CHANGE_COST * changes) * largest * largest
-    if cost > 2.0 * dofs.size ** 3 + 12.0 * n * n:
+    if cost > REBUILD_COST * dofs.size ** 3 + 12.0 * n * n:
         return _rebuild(s, dofs, coefficients)
     p = m - 1
     while p >= 0:  # highest first: the last one, moved into p, was already kept
