@@ -83,9 +83,9 @@ the coefficient of every node in its wave, and slip-weakening at each of its ste
 REBUILD_COST = 1.0
 """A rebuild (M formed and inverted by LAPACK, its known products made afresh) in units
 of m^3 of the same model, plus 12 n^2. Set on slip-weakening runs, where most rebuilds
-and row changes are (40 at 80 elements, 4 at 160): 0.6, 1.0, 1.2 and 1.4 took 7.7, 7.2,
-7.3 and 7.4 s at 80 elements, 5.9, 5.8, 6.3 and 7.2 s at 160. (Timed alone, a rebuild
-at n 161 cost as much as 26 row changes at m 80 and 60 at m 170.)"""
+and row changes are (40 random laws at 80 elements, 4 at 160): 0.6, 1.0, 1.2 and 1.4
+took 7.7, 7.2, 7.3 and 7.4 s at 80 elements, 5.9, 5.8, 6.3 and 7.2 s at 160. (Timed
+alone, a rebuild at n 161 cost as much as 26 row changes at m 80 and 60 at m 170.)"""
 # The known displacements' product is updated by the nodes whose s_prev moved, and
 # made afresh every this many increments: the updates' rounding does not build up.
 _REFRESH_EVERY = 256

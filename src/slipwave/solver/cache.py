@@ -118,7 +118,6 @@ class SolverCache:
         """
         _keep(self._approaches, key, approach, APPROACHES_KEPT)
 
-
     def body(self, key: Hashable, make: Callable[[], Any]) -> Any:
         """A kept body, or the one ``make`` returns, kept under ``key``.
 
