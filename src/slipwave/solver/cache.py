@@ -34,7 +34,7 @@ BODIES_KEPT = 4
 
 
 class SolverCache:
-    """Condensed slabs and frictionless approaches, shared by a process's simulations.
+    """Condensed slabs, their bodies and normal approaches, shared by a process's runs.
 
     Parameters
     ----------
