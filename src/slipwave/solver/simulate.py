@@ -526,15 +526,16 @@ def _reduced(slab: Slab, cache: SolverCache | None) -> tuple[Condensed, Body]:
     """The slab condensed, and reduced to a body whose every node sticks.
 
     A ``cache`` keeps both for the slab: a map row's or a fit's simulations restart
-    its body rather than condense, allocate and zero one each (a tenth of a map case).
+    its body rather than condense, allocate and zero one each (5 % of a map case).
     """
+    gap = slab.initial_gap()
+
     def reduce() -> tuple[Condensed, Body]:
         condensed = condense(slab, cache=cache)
-        return condensed, Body(condensed.stiffness, slab.initial_gap())
+        return condensed, Body(condensed.stiffness, gap)
 
     if cache is None:
         return reduce()
-    gap = slab.initial_gap()
     condensed, body = cache.body((geometry_key(slab), slab.youngs_modulus, gap.tobytes()),
                                  reduce)
     body.restart()
