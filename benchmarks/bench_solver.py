@@ -1,8 +1,8 @@
 """Solver speed (issue 33): the compiled contact solver against its targets, one core.
 
 1. A map case at 160 elements (H/L 0.5, N held, frictionless approach; normal loading
-   and tangential loading to gross sliding, the slab condensed once): <= 4 ms,
-   averaged over f = 0.10..1.40.
+   and tangential loading to gross sliding, the slab condensed once; the variables the
+   map keeps): <= 4 ms, averaged over f = 0.10..1.40.
 2. A 280 s virtual-bench test (Coulomb fs 0.9, fd 0.6, H/L 0.5, N held, the actuator
    through the machine's spring): <= 0.1 s at 80 elements, 0.4 s at 160, 2 s at 320;
    the same test under slip-weakening (Dc 0.1 mm) <= 3 times Coulomb's time.
@@ -37,6 +37,7 @@ import time
 import numpy as np
 
 from slipwave.bench.generate import BenchTest
+from slipwave.map import MAP_CASE_VARIABLES
 from slipwave.solver import Coulomb, LoadPath, Slab, SolverCache, simulate
 from slipwave.solver.slab import condense
 from targets import check, finish
@@ -64,7 +65,8 @@ def map_cases(repeat: int) -> tuple[float, int]:
     cache = SolverCache()
     simulate(slab, Coulomb(fs=1.0), path, cache=cache)  # condensed, approach kept
     frictions = np.round(np.arange(0.10, 1.401, 0.05), 2)
-    seconds = [best_time(lambda f=f: simulate(slab, Coulomb(fs=float(f)), path, cache=cache),
+    seconds = [best_time(lambda f=f: simulate(slab, Coulomb(fs=float(f)), path, cache=cache,
+                                              variables=MAP_CASE_VARIABLES),
                          repeat) for f in frictions]
     return float(np.mean(seconds)), frictions.size
 
@@ -87,6 +89,7 @@ _CHILD = """
 import json, sys, time
 start = time.perf_counter()
 from slipwave.bench.generate import BenchTest
+from slipwave.map import MAP_CASE_VARIABLES
 from slipwave.solver import Coulomb, Slab, LoadPath, simulate
 imported = time.perf_counter()
 elements = int(sys.argv[1])

@@ -10,7 +10,12 @@ from slipwave.bench import DEFAULT_SENSORS, Sensor, apply_sensors
 from slipwave.errors import SlipwaveError
 from slipwave.io import read_acquisition, write_acquisition
 from slipwave.solver import Coulomb, LoadPath, Slab, simulate
-from slipwave.solver.signals import clean_signals, step_times, wave_durations
+from slipwave.solver.signals import (
+    SIGNAL_VARIABLES,
+    clean_signals,
+    step_times,
+    wave_durations,
+)
 
 SPEED, LOADING, RATE = 0.048, 10.0, 200.0
 
@@ -27,6 +32,14 @@ def clean(simulation) -> xr.Dataset:
     duration = float(step_times(simulation, speed=SPEED, loading_time=LOADING)[-1]) - 0.5
     return clean_signals(simulation, speed=SPEED, loading_time=LOADING, duration=duration,
                          sample_rate=RATE, wave_speed=200.0)
+
+
+def test_the_signals_need_only_their_variables(simulation, clean):
+    # a fit's simulations keep only these (simulate's variables)
+    kept = simulation[list(SIGNAL_VARIABLES)]
+    xr.testing.assert_identical(clean_signals(kept, speed=SPEED, loading_time=LOADING,
+                                              duration=float(clean["time"][-1]) + 1 / RATE,
+                                              sample_rate=RATE, wave_speed=200.0), clean)
 
 
 def test_phases_in_time(simulation, clean):

@@ -11,6 +11,7 @@ from slipwave.cli import main
 from slipwave.errors import SlipwaveError
 from slipwave.io import read_dataset
 from slipwave.map import (
+    MAP_CASE_VARIABLES,
     PAPER_FRICTIONS,
     PAPER_HEIGHT_RATIOS,
     assemble_map,
@@ -29,7 +30,8 @@ from slipwave.map import (
     shard_count,
 )
 from slipwave.plot import plot_map, plot_zone_histories
-from slipwave.solver import LoadPath
+from slipwave.solver import Coulomb, LoadPath, Slab, describe_behaviour, simulate
+from slipwave.solver.behaviour import BEHAVIOUR_VARIABLES
 
 PAPER_PATH = LoadPath(normal_control="force", normal_friction=False)
 
@@ -46,6 +48,15 @@ def test_the_papers_grid_has_1572_cases():
 def small_map() -> xr.Dataset:
     rows = [map_row(hl, [0.2, 0.6, 1.0], elements=40, path=PAPER_PATH) for hl in (0.2, 0.5)]
     return assemble_map(rows)
+
+
+def test_a_map_case_keeps_what_its_description_reads():
+    slab = Slab(height=20.0, elements=40)
+    path = LoadPath(normal_control="force", normal_friction=False)
+    whole = simulate(slab, Coulomb(fs=0.6), path)
+    kept = simulate(slab, Coulomb(fs=0.6), path, variables=MAP_CASE_VARIABLES)
+    assert set(BEHAVIOUR_VARIABLES) <= set(MAP_CASE_VARIABLES)
+    assert describe_behaviour(kept) == describe_behaviour(whole)
 
 
 def test_rows_hold_every_case_with_its_succession(small_map):

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from slipwave.cache import DiskCache
 from slipwave.cli import main
@@ -25,6 +26,7 @@ from slipwave.solver import (
 from slipwave.solver import contact as contact_module
 from slipwave.solver import slab as slab_module
 from slipwave.solver.compiled import CALLEE_GROUPS
+from slipwave.solver.simulate import SIMULATION_VARIABLES
 
 
 def test_a_cache_condenses_a_geometry_once_and_a_store_keeps_it_across_caches(
@@ -107,6 +109,29 @@ def test_a_kept_body_restarted_gives_what_a_new_one_does():
         afresh = simulate(curved if k == len(runs) - 1 else slab, law, path)
         for name in ("T", "N", "DG", "DD", "state", "q", "p", "slip", "iterations"):
             np.testing.assert_array_equal(ds[name].values, afresh[name].values)
+
+
+@pytest.mark.parametrize("wanted", [("T", "N"), ("DG_before_wave", "gap", "p"),
+                                    ("state", "cascade_round", "actuator", "wave")])
+def test_a_simulation_keeps_the_variables_asked_as_the_whole_result_has_them(wanted):
+    slab = Slab(height=40.0, elements=24)
+    path = LoadPath(max_travel=0.5)
+    whole = simulate(slab, Coulomb(fs=0.9, fd=0.6), path)
+    assert tuple(whole.data_vars) == SIMULATION_VARIABLES
+    some = simulate(slab, Coulomb(fs=0.9, fd=0.6), path, variables=wanted)
+    assert set(some.data_vars) == set(wanted)
+    assert some.attrs == whole.attrs and set(some.coords) == set(whole.coords)
+    for name in wanted:
+        xr.testing.assert_identical(some[name], whole[name])
+
+
+def test_an_unknown_variable_is_refused_before_simulating(monkeypatch):
+    def fails(*args, **kwargs):
+        raise AssertionError("simulated")
+
+    monkeypatch.setattr(Body, "solve_increment", fails)
+    with pytest.raises(ValueError, match="no variable pressure; it has state,"):
+        simulate(Slab(elements=24), Coulomb(fs=0.5), variables=("T", "pressure"))
 
 
 def test_damaged_store_file_is_rebuilt(tmp_path):

@@ -40,6 +40,11 @@ if TYPE_CHECKING:
 # The solver (numba, scipy: 0.4 s to import) is imported where cases are simulated: the
 # Snakefile and `slipwave map assemble` import this module only to plan and join the map.
 
+MAP_CASE_VARIABLES = ("phase", "wave", "T", "N", "state", "slip_direction", "residual")
+"""What a map case keeps of its simulation (``simulate``'s ``variables``): the
+variables :func:`~slipwave.solver.behaviour.describe_behaviour` reads, and the
+residual."""
+
 PAPER_HEIGHT_RATIOS = MAP_HEIGHT_RATIOS
 """The paper's slab slendernesses H/L (the map's default)."""
 
@@ -110,7 +115,8 @@ def map_row(
     for k, friction in enumerate(frictions):
         started = time.perf_counter()
         try:
-            ds = simulate(slab, Coulomb(fs=float(friction)), path, cache=cache)
+            ds = simulate(slab, Coulomb(fs=float(friction)), path, cache=cache,
+                          variables=MAP_CASE_VARIABLES)
         except SlipwaveError as err:
             raise SlipwaveError(f"map case H/L {height_ratio:g}, f {friction:g}: {err}") from err
         behaviour = describe_behaviour(ds, min_size=min_size)

@@ -13,7 +13,7 @@ to add to the campaign table.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -120,7 +120,8 @@ class TestSetup:
     def simulate(self, friction: Coulomb, elements: int, *,
                  cache: SolverCache | None = None,
                  profile: Callable[[np.ndarray], np.ndarray] | None = None,
-                 travel_step: float = TRAVEL_STEP_MM) -> xr.Dataset:
+                 travel_step: float = TRAVEL_STEP_MM,
+                 variables: Collection[str] | None = None) -> xr.Dataset:
         """The test simulated: its slab and load path with ``friction``.
 
         Parameters
@@ -136,6 +137,9 @@ class TestSetup:
             :func:`slipwave.solver.slab.rounded_corners`); ``None``: flat.
         travel_step
             The actuator's travel per load step, mm (:meth:`load_path`).
+        variables
+            The simulation's variables to return (:func:`slipwave.solver.simulate`);
+            ``None``: all.
 
         Returns
         -------
@@ -150,7 +154,8 @@ class TestSetup:
         """
         try:
             slab = dataclasses.replace(self.slab(elements), profile=profile)
-            return simulate(slab, friction, self.load_path(travel_step), cache=cache)
+            return simulate(slab, friction, self.load_path(travel_step), cache=cache,
+                            variables=variables)
         except SolverError as err:
             settings = ", ".join(f"{key} {self[key]:.4g} ({self.settings[key].source})"
                                  for key in ("youngs_modulus_mpa", "normal_load_n",

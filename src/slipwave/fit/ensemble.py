@@ -44,6 +44,7 @@ from slipwave.fit.laws import law_of
 from slipwave.fit.likelihood import ModelError
 from slipwave.setup import TestSetup
 from slipwave.solver import SolverCache
+from slipwave.solver.signals import SIGNAL_VARIABLES
 
 
 @dataclass(frozen=True)
@@ -209,7 +210,8 @@ class Ensemble:
                                    "machine_stiffness_n_mm": member.stiffness,
                                    "speed_mm_s": member.speed}, "an ensemble member's draw")
         simulation = setup.simulate(law_of(law, params), self.elements, cache=self.cache,
-                                    travel_step=TRAVEL_STEP_MM * member.travel_step)
+                                    travel_step=TRAVEL_STEP_MM * member.travel_step,
+                                    variables=SIGNAL_VARIABLES)
         self.simulations += 1
         recording = simulated_recording(simulation, setup,
                                         sample_rate=self.sizes["sample_rate"])

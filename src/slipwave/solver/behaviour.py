@@ -46,6 +46,10 @@ import xarray as xr
 from slipwave.defaults import MIN_ZONE_MM
 from slipwave.solver.zones import CONDITIONS, follow_zones, node_conditions
 
+BEHAVIOUR_VARIABLES = ("phase", "wave", "T", "N", "state", "slip_direction")
+"""The variables of a simulation that :func:`describe_behaviour` reads (``simulate``'s
+``variables``)."""
+
 MIN_SWEEP_FRACTION = 0.05
 """A slip zone enters the succession once it has covered this fraction of the contact."""
 
@@ -225,8 +229,7 @@ def describe_behaviour(ds: xr.Dataset, *, min_size: float = MIN_ZONE_MM,
 
     """
     # the arrays read from the variables: ds[name] would make a DataArray of each
-    values = {name: ds.variables[name].values for name in (
-        "x", "phase", "wave", "T", "N", "state", "slip_direction")}
+    values = {name: ds.variables[name].values for name in ("x", *BEHAVIOUR_VARIABLES)}
     x, phase, wave = values["x"], values["phase"], values["wave"]
     T, N = values["T"], values["N"]
     normal_end = int(np.flatnonzero(phase == "normal")[-1])

@@ -20,6 +20,11 @@ from slipwave.io.channels import CHANNEL_ATTRS, CHANNELS
 CARD_SIGN = {"T": 1.0, "N": -1.0, "DG": 1.0, "DD": 1.0, "DT": 1.0}
 """Signs of the card's channels relative to the simulation: N reads negative in compression."""
 
+SIGNAL_VARIABLES = ("phase", "actuator", "cascade_round", *CHANNELS,
+                    *(f"{name}_before_wave" for name in CHANNELS))
+"""The variables of a simulation that :func:`clean_signals` reads (``simulate``'s
+``variables``)."""
+
 
 def step_times(simulation: xr.Dataset, *, speed: float, loading_time: float) -> np.ndarray:
     """Time (s) at the end of each load step.

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field, fields
 from typing import Any, Literal, NamedTuple
 
@@ -36,6 +38,13 @@ ASYMPTOTIC_LOAD_RATIO = 100.0
 """Under a held normal displacement, a contact whose zero-approach limit sticks is
 jammed once T reaches this many times the normal load: the normal approach then
 weighs less than 1 % in the state, which is that limit's."""
+
+SIMULATION_VARIABLES = (
+    "state", "slip_direction", "cascade_round", "p", "q", "gap", "slip", "ux", "uy",
+    "ux_before_wave", "uy_before_wave", "T", "N", "DG", "DD", "DT", "approach", "actuator",
+    "T_before_wave", "N_before_wave", "DG_before_wave", "DD_before_wave", "DT_before_wave",
+    "phase", "wave", "static_friction", "residual", "iterations", "substeps")
+"""The data variables of :func:`simulate`'s result, in its order."""
 
 _MAX_SPLITS = 6  # sub-stepping depth: an increment is cut into at most 64 parts
 _CAPACITY_MARGIN = 1e-9  # relative: T this far past fs N has no equilibrium (rounding aside)
@@ -416,6 +425,7 @@ def simulate(
     path: LoadPath | None = None,
     *,
     cache: SolverCache | None = None,
+    variables: Collection[str] | None = None,
 ) -> xr.Dataset:
     """Follow the bench's load path on a slab, increment by increment.
 
@@ -444,6 +454,8 @@ def simulate(
     ------
     SolverError
         If an increment does not converge, even sub-stepped.
+    ValueError
+        If ``variables`` names one :data:`SIMULATION_VARIABLES` does not have.
 
     Parameters
     ----------
@@ -456,6 +468,10 @@ def simulate(
     cache
         Where the slab's condensation and its frictionless normal approach are
         looked up and kept (a map row's, a fit's); ``None``: computed afresh.
+    variables
+        The variables to return, of those above (coordinates and attributes always come);
+        ``None``: all. A caller that reads a few (the map's events, a fit's signals)
+        saves the time of making the others.
 
     Examples
     --------
@@ -464,6 +480,10 @@ def simulate(
     (True, 0.5)
 
     """
+    unknown = sorted(set(variables or ()) - set(SIMULATION_VARIABLES))
+    if unknown:
+        raise ValueError(f"simulate has no variable {', '.join(unknown)}; "
+                         f"it has {', '.join(SIMULATION_VARIABLES)}")
     path = path or LoadPath()
     condensed, body = _reduced(slab, cache)
     run = _Run(slab, friction, body, condensed, s_prev=np.zeros(body.n), slip=np.zeros(body.n))
@@ -519,7 +539,7 @@ def simulate(
             dx = min(dx + travel_step, path.max_travel)
             run.advance(previous, hold(dx=dx), "tangential")
 
-    return _to_dataset(run, path)
+    return _to_dataset(run, path, variables)
 
 
 def _reduced(slab: Slab, cache: SolverCache | None) -> tuple[Condensed, Body]:
@@ -683,88 +703,101 @@ def _sliding(run: _Run, control: Control, dx_floor: float) -> Increment | None:
     return sliding
 
 
-def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
+def _to_dataset(run: _Run, path: LoadPath, variables: Collection[str] | None) -> xr.Dataset:
     steps = run.steps
     slab = run.slab
     width, n = slab.width, run.body.n
     increments = [step.increment for step in steps]
 
+    # Each array is made when a wanted variable first needs it, and once.
+    @functools.cache
     def stacked(name: str) -> np.ndarray:
         """An increment's field, for every step."""
         return np.array([getattr(increment, name) for increment in increments])
 
-    u, r, u_before, r_before = stacked("u"), stacked("r"), stacked("u_before"), stacked("r_before")
-    state = stacked("state")
-    dy = stacked("dy")
-    sensors = run.condensed.sensors
-    # a product per step, as each step alone would have it (a product of all steps at
-    # once rounds differently)
-    edges = np.array([sensors @ row for row in u])
-    edges_before = np.array([edges[k] if increment.u_before is increment.u
-                             else sensors @ u_before[k]
-                             for k, increment in enumerate(increments)])
-    before_wave = {
-        "T": width * r_before[:, :n].sum(axis=1), "N": width * r_before[:, n:].sum(axis=1),
-        "DG": edges_before[:, 0], "DD": edges_before[:, 1], "DT": stacked("dx_before"),
-    }
-    pressure, shear, gap = run.contact_fields(u, r, dy, state)
+    @functools.cache
+    def edges() -> np.ndarray:
+        # a product per step, as each step alone would have it (a product of all steps
+        # at once rounds differently)
+        return np.array([run.condensed.sensors @ row for row in stacked("u")])
+
+    @functools.cache
+    def before_wave() -> dict[str, np.ndarray]:
+        r_before = stacked("r_before")
+        edges_before = np.array([edges()[k] if increment.u_before is increment.u
+                                 else run.condensed.sensors @ increment.u_before
+                                 for k, increment in enumerate(increments)])
+        return {"T": width * r_before[:, :n].sum(axis=1),
+                "N": width * r_before[:, n:].sum(axis=1),
+                "DG": edges_before[:, 0], "DD": edges_before[:, 1], "DT": stacked("dx_before")}
+
+    @functools.cache
+    def contact() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return run.contact_fields(stacked("u"), stacked("r"), stacked("dy"), stacked("state"))
+
+    def peak(name: str, units: str) -> tuple[Any, ...]:
+        return ("step", before_wave()[name], {
+            "units": units,
+            "long_name": f"{name} in the stuck state of the step, before its wave (the peak)"})
 
     node = ("step", "x")
-    data = {
-        "state": (node, state.astype(np.int8), {
+    made: dict[str, Callable[[], tuple[Any, ...]]] = {
+        "state": lambda: (node, stacked("state").astype(np.int8), {
             "long_name": "contact state", "flag_values": np.array([0, 1, 2], dtype=np.int8),
             "flag_meanings": "open stick slip"}),
-        "slip_direction": (node, stacked("direction").astype(np.int8), {
+        "slip_direction": lambda: (node, stacked("direction").astype(np.int8), {
             "long_name": "sign of the slab's slip increment relative to the flat",
             "units": "1"}),
-        "cascade_round": (node, stacked("round_slipped").astype(np.int16), {
+        "cascade_round": lambda: (node, stacked("round_slipped").astype(np.int16), {
             "long_name": "cascade round in which the node started slipping in this step "
                          "(-1: it did not)", "units": "1"}),
-        "p": (node, pressure, {"units": "MPa", "long_name": "contact pressure"}),
-        "q": (node, shear, {
+        "p": lambda: (node, contact()[0], {"units": "MPa", "long_name": "contact pressure"}),
+        "q": lambda: (node, contact()[1], {
             "units": "MPa", "long_name": "shear traction on the slab (positive along +x)"}),
-        "gap": (node, gap, {"units": "mm", "long_name": "normal gap"}),
-        "slip": (node, np.array([step.slip for step in steps]), {
+        "gap": lambda: (node, contact()[2], {"units": "mm", "long_name": "normal gap"}),
+        "slip": lambda: (node, np.array([step.slip for step in steps]), {
             "units": "mm", "long_name": "accumulated slip of the slab relative to the flat"}),
-        "ux": (node, u[:, :n], {
+        "ux": lambda: (node, stacked("u")[:, :n], {
             "units": "mm", "long_name": "tangential displacement of the contact nodes"}),
-        "uy": (node, u[:, n:], {
+        "uy": lambda: (node, stacked("u")[:, n:], {
             "units": "mm", "long_name": "normal displacement of the contact nodes"}),
-        "ux_before_wave": (node, u_before[:, :n], {
+        "ux_before_wave": lambda: (node, stacked("u_before")[:, :n], {
             "units": "mm", "long_name": "ux in the stuck state of the step, before its wave"}),
-        "uy_before_wave": (node, u_before[:, n:], {
+        "uy_before_wave": lambda: (node, stacked("u_before")[:, n:], {
             "units": "mm", "long_name": "uy in the stuck state of the step, before its wave"}),
-        "T": ("step", width * r[:, :n].sum(axis=1), {
+        "T": lambda: ("step", width * stacked("r")[:, :n].sum(axis=1), {
             "units": "N", "long_name": "tangential load"}),
-        "N": ("step", width * r[:, n:].sum(axis=1), {
+        "N": lambda: ("step", width * stacked("r")[:, n:].sum(axis=1), {
             "units": "N", "long_name": "normal load", "comment": "compressive load, positive"}),
-        "DG": ("step", edges[:, 0], {
+        "DG": lambda: ("step", edges()[:, 0], {
             "units": "mm",
             "long_name": "left-edge lateral displacement of the slab, 5 mm above the contact"}),
-        "DD": ("step", edges[:, 1], {
+        "DD": lambda: ("step", edges()[:, 1], {
             "units": "mm",
             "long_name": "right-edge lateral displacement of the slab, 5 mm above the contact"}),
-        "DT": ("step", stacked("dx"), {"units": "mm", "long_name": "flat displacement"}),
-        "approach": ("step", dy, {"units": "mm", "long_name": "normal approach of the flat"}),
-        "actuator": ("step", np.array([step.actuator for step in steps]), {
+        "DT": lambda: ("step", stacked("dx"), {"units": "mm", "long_name": "flat displacement"}),
+        "approach": lambda: ("step", stacked("dy"), {
+            "units": "mm", "long_name": "normal approach of the flat"}),
+        "actuator": lambda: ("step", np.array([step.actuator for step in steps]), {
             "units": "mm", "long_name": "actuator travel (machine drive; NaN otherwise)"}),
-        **{f"{name}_before_wave": ("step", before_wave[name], {
-            "units": units, "long_name": f"{name} in the stuck state of the step, before its "
-            "wave (the peak)"}) for name, units in
-            (("T", "N"), ("N", "N"), ("DG", "mm"), ("DD", "mm"), ("DT", "mm"))},
-        "phase": ("step", np.array([step.phase for step in steps]), {"long_name": "load phase"}),
-        "wave": ("step", np.array([step.wave for step in steps]), {
+        **{f"{name}_before_wave": functools.partial(peak, name, units) for name, units in
+           (("T", "N"), ("N", "N"), ("DG", "mm"), ("DD", "mm"), ("DT", "mm"))},
+        "phase": lambda: ("step", np.array([step.phase for step in steps]), {
+            "long_name": "load phase"}),
+        "wave": lambda: ("step", np.array([step.wave for step in steps]), {
             "long_name": "nodes that slipped in the step: none, partial or gross (all)"}),
-        "static_friction": ("step", np.array([step.static_friction for step in steps]), {
+        "static_friction": lambda: ("step", np.array([step.static_friction for step in steps]), {
             "units": "1", "long_name": "static friction coefficient in force during the step"}),
-        "residual": ("step", stacked("residual"), {
+        "residual": lambda: ("step", stacked("residual"), {
             "units": "1", "long_name": "relative complementarity residual"}),
-        "iterations": ("step", stacked("iterations").astype(np.int32), {
+        "iterations": lambda: ("step", stacked("iterations").astype(np.int32), {
             "units": "1", "long_name": "active-set iterations"}),
-        "substeps": ("step", stacked("substeps").astype(np.int32), {
+        "substeps": lambda: ("step", stacked("substeps").astype(np.int32), {
             "units": "1", "long_name": "parts the step was solved in (1: whole; more: "
                                        "sub-stepped, each part its own wave)"}),
     }
+    if variables is not None:
+        made = {name: make for name, make in made.items() if name in variables}
     coords = {
         "step": ("step", np.arange(len(steps)), {"long_name": "load step"}),
         "x": ("x", slab.x, {"units": "mm", "long_name": "position along the contact, "
@@ -800,5 +833,5 @@ def _to_dataset(run: _Run, path: LoadPath) -> xr.Dataset:
                               "not reached: the tangential load cap or step limit came first")
     # made Variables first: xarray then skips inferring each one (a third of a map
     # case's time went to building its Dataset)
-    return xr.Dataset({name: xr.Variable(*spec) for name, spec in data.items()},
+    return xr.Dataset({name: xr.Variable(*make()) for name, make in made.items()},
                       coords=coords, attrs=attrs)
