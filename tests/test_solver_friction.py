@@ -90,3 +90,24 @@ def test_a_run_in_goes_its_share_of_the_way_per_gross_slip():
     assert Coulomb(fs=0.9, fd=0.6, fs_final=0.7, runin_slips=2.5).static_after(5) == 0.7
     with pytest.raises(SlipwaveError, match="runin_slips > 0"):
         Coulomb(fs=0.9, fd=0.6, fs_final=1.2, runin_slips=0)
+
+
+def test_a_run_in_that_turns_goes_to_its_peak_then_back():
+    law = Coulomb(fs=0.8, fd=0.6, fs_peak=1.4, fs_final=0.9, runin_slips=2.0)
+    assert [law.static_after(g) for g in range(6)] == pytest.approx(
+        [0.8, 1.1, 1.4, 1.15, 0.9, 0.9])
+    with pytest.raises(SlipwaveError, match="turn needs fs_final"):
+        Coulomb(fs=0.8, fd=0.6, fs_peak=1.4)
+    with pytest.raises(SlipwaveError, match="fs_peak >= fd"):
+        Coulomb(fs=0.8, fd=0.6, fs_peak=0.5, fs_final=0.9, runin_slips=2.0)
+
+
+def test_the_virtual_bench_records_a_run_in_that_turns():
+    spec = BenchTest("turn", height=40.0, fs=0.8, fd=0.6, fs_peak=1.4, fs_final=0.8,
+                     runin_slips=2, elements=40, video="none")
+    simulation = simulate_test(spec, seed=1).simulation
+    assert simulation.attrs["friction_fs_peak"] == 1.4
+    gross = np.flatnonzero(simulation["wave"].values == "gross")
+    starts = gross[np.r_[True, np.diff(gross) > 1]]
+    assert simulation["static_friction"].values[starts][:6].tolist() == pytest.approx(
+        [0.8, 1.1, 1.4, 1.1, 0.8, 0.8])

@@ -66,7 +66,8 @@ class BenchTest:
 
     The interface follows Coulomb's law with a static coefficient that grows
     from ``fs`` to ``fs_final`` over the first ``runin_slips`` gross slips
-    (run-in) and a dynamic one ``fd``; with ``dc`` (mm), linear slip-weakening
+    (run-in; with ``fs_peak``, through a turn: :class:`~slipwave.solver.Coulomb`) and
+    a dynamic one ``fd``; with ``dc`` (mm), linear slip-weakening
     instead: a slipping node's coefficient falls from fs to fd over a slip Dc.
     Waves whose T drop is below ``min_event_drop`` (micro-slips at the edge of
     the contact) are listed in the truth as not visible. ``edge_convention`` is
@@ -85,6 +86,7 @@ class BenchTest:
     fd: float = 0.6
     fs_final: float | None = 1.3
     runin_slips: float = 4
+    fs_peak: float | None = None
     dc: float | None = None
     normal_load: float = 85.0
     speed: float = 0.048
@@ -132,8 +134,9 @@ class BenchTest:
         runin = self.runin_slips if self.fs_final is not None else 0
         if self.dc is not None:
             return SlipWeakening(fs=self.fs, fd=self.fd, fs_final=self.fs_final,
-                                 runin_slips=runin, dc=self.dc)
-        return Coulomb(fs=self.fs, fd=self.fd, fs_final=self.fs_final, runin_slips=runin)
+                                 runin_slips=runin, fs_peak=self.fs_peak, dc=self.dc)
+        return Coulomb(fs=self.fs, fd=self.fd, fs_final=self.fs_final, runin_slips=runin,
+                       fs_peak=self.fs_peak)
 
     def load_path(self) -> LoadPath:
         """The bench's load path: N held, the flat driven through the machine.
@@ -176,6 +179,7 @@ def setup_bench_test(setup: TestSetup, friction: Coulomb, *, elements: int) -> B
         poisson_ratio=setup["poisson_ratio"], elements=elements, fs=friction.fs,
         fd=friction.dynamic, fs_final=friction.fs_final,
         runin_slips=friction.runin_slips if friction.fs_final is not None else 4,
+        fs_peak=friction.fs_peak,
         dc=getattr(friction, "dc", None), normal_load=setup["normal_load_n"],
         speed=setup["speed_mm_s"], duration=setup["duration_s"],
         loading_time=setup["loading_time_s"],

@@ -59,13 +59,18 @@ class Coulomb:
     slips (an interface whose adhesion builds up as it is worn in, or falls as a
     surface film is wiped off); the dynamic one stays. ``runin_slips`` need not be
     whole: after g gross slips the coefficient has gone min(g / runin_slips, 1) of the
-    way, so a fit can move it continuously.
+    way, so a fit can move it continuously. With ``fs_peak`` the run-in passes through
+    a turn: from ``fs`` to ``fs_peak`` over ``runin_slips`` gross slips, then to
+    ``fs_final`` over as many more (a surface cleaned by the first slips, then
+    smoothed by wear): no law the fit knows follows it (the virtual bench's
+    misspecified recording).
     """
 
     fs: float
     fd: float | None = None
     fs_final: float | None = None
     runin_slips: float = 0
+    fs_peak: float | None = None
 
     def __post_init__(self) -> None:
         if self.fd is None:
@@ -75,6 +80,9 @@ class Coulomb:
         if self.fs_final is not None and not (self.fs_final >= self.dynamic
                                               and self.runin_slips > 0):
             raise SlipwaveError("a run-in needs fs_final >= fd and runin_slips > 0")
+        if self.fs_peak is not None and not (self.fs_final is not None
+                                             and self.fs_peak >= self.dynamic):
+            raise SlipwaveError("a run-in's turn needs fs_final and fs_peak >= fd")
 
     def static_after(self, gross_slips: int) -> float:
         """The static coefficient after ``gross_slips`` gross slips.
@@ -93,7 +101,11 @@ class Coulomb:
         if self.fs_final is None:
             return self.fs
         progress = min(gross_slips / self.runin_slips, 1.0)
-        return self.fs + (self.fs_final - self.fs) * progress
+        if self.fs_peak is None:
+            return self.fs + (self.fs_final - self.fs) * progress
+        back = min(max(gross_slips / self.runin_slips - 1.0, 0.0), 1.0)
+        return self.fs + (self.fs_peak - self.fs) * progress + (
+            self.fs_final - self.fs_peak) * back
 
     @property
     def dynamic(self) -> float:
@@ -825,6 +837,8 @@ def _to_dataset(run: _Run, path: LoadPath, variables: Collection[str] | None) ->
     if run.friction.fs_final is not None:
         attrs["friction_fs_final"] = run.friction.fs_final
         attrs["friction_runin_slips"] = run.friction.runin_slips
+    if run.friction.fs_peak is not None:
+        attrs["friction_fs_peak"] = run.friction.fs_peak
     attrs.update({f"path_{item.name}": "none" if getattr(path, item.name) is None
                   else getattr(path, item.name) for item in fields(path)})
     attrs["gross_sliding"] = ("reached" if run.reached_gross else
