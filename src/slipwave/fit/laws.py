@@ -11,7 +11,7 @@ fs_final over its first gross slips, rising (the contact ages or wears in) or fa
 Examples
 --------
 >>> law_of("slip-weakening", {"fs": 1.0, "fd": 0.6, "dc": 0.2})
-SlipWeakening(fs=1.0, fd=0.6, fs_final=None, runin_slips=0, dc=0.2)
+SlipWeakening(fs=1.0, fd=0.6, fs_final=None, runin_slips=0, fs_peak=None, dc=0.2)
 >>> in_prior("coulomb", {"fs": 0.9, "fd": 0.6}), in_prior("coulomb", {"fs": 0.6, "fd": 0.9})
 (True, False)
 """
