@@ -460,7 +460,12 @@ def simulate(
         lateral displacement of the left and right faces at 5 mm), ``DT`` (mm,
         flat travel), ``approach`` (mm, normal approach of the flat),
         ``phase`` (``normal``/``tangential``), ``wave`` (``none``,
-        ``partial``, ``gross``), ``residual``, ``iterations``.
+        ``partial``, ``gross``), ``residual``, ``iterations``. Also per node and step
+        ``ux``, ``uy`` (mm, the contact nodes' displacements) and ``ux_before_wave``,
+        ``uy_before_wave`` (in the step's stuck state, before its wave); per step
+        ``T_before_wave`` to ``DT_before_wave`` (the peak before the wave),
+        ``actuator`` (mm, NaN unless the machine drives the flat),
+        ``static_friction`` and ``substeps``: :data:`SIMULATION_VARIABLES`.
 
     Raises
     ------
@@ -481,9 +486,10 @@ def simulate(
         Where the slab's condensation and its frictionless normal approach are
         looked up and kept (a map row's, a fit's); ``None``: computed afresh.
     variables
-        The variables to return, of those above (coordinates and attributes always come);
-        ``None``: all. A caller that reads a few (the map's events, a fit's signals)
-        saves the time of making the others.
+        The data variables to return, by name (:data:`SIMULATION_VARIABLES`, described
+        under Returns); the coordinates and attributes always come. ``None``: all. A
+        caller that reads a few (the map's events, a fit's signals) saves the time of
+        making the others.
 
     Examples
     --------
