@@ -31,8 +31,9 @@ others. Coulomb holds fs, the run-in law goes one way, and
 slip-weakening's coefficient falls within a slip, not from one slip to the next.
 (Slip-weakening with a run-in, the recording used before, was reproduced by the
 slip-weakening law alone within the features' errors: no misspecification the features
-see.) Target: its chosen law's predictive differs on at least one feature, and the
-test's page would say so.
+see.) It is made and fitted three times (:data:`MISSPECIFIED_DRAWS`: other sensor noise,
+members and draws). Target: in every draw its chosen law's predictive differs on at
+least one feature, and the test's page would say so.
 
 A drawn test without two gross slips in its 280 s, or one the solver cannot follow, is
 drawn again (no fit can tell a law's dynamic coefficient without a gross slip); how
@@ -112,13 +113,16 @@ def draw_test(seed: int, index: int, made_elements: int = MADE_ELEMENTS
 
 MISSPECIFIED = {"fs": 0.8, "fd": 0.6, "fs_peak": 1.6, "fs_final": 0.8, "runin_slips": 1.5}
 """The recording none of the laws reproduces: a run-in that turns (up, then back)."""
+MISSPECIFIED_DRAWS = 3
+"""Its recordings (the sensors' noise, the fit's members and draws differ): the first
+one's seed set is the one its turn was chosen on, the others are not."""
 
 
 def one(job: tuple[int, int, int]) -> dict[str, Any]:
     """Draw test ``job`` (seed, index, mesh; redrawn while it shows fewer than two gross
     slips) and fit it.
 
-    Index -1 is the misspecified test (:data:`MISSPECIFIED`).
+    A negative index is a draw of the misspecified test (:data:`MISSPECIFIED`).
     """
     seed, index, made_elements = job
     start = time.perf_counter()
@@ -193,8 +197,8 @@ def main() -> None:
     args = parser.parse_args()
     load = os.getloadavg()[0]
     begun = time.perf_counter()
-    jobs = [(args.seed, -1, args.made_elements)] + [(args.seed, k, args.made_elements)
-                                                   for k in range(args.tests)]
+    jobs = ([(args.seed, -k, args.made_elements) for k in range(1, MISSPECIFIED_DRAWS + 1)]
+            + [(args.seed, k, args.made_elements) for k in range(args.tests)])
     done: dict[int, dict[str, Any]] = {}
     with ProcessPoolExecutor(args.jobs) as pool:
         futures = [pool.submit(one, job) for job in jobs]
@@ -208,7 +212,7 @@ def main() -> None:
                 partial.replace(args.output)
     runs = [done[index] for _, index, _ in jobs]
     wall = time.perf_counter() - begun
-    odd, runs = runs[0], runs[1:]
+    odd, runs = runs[:MISSPECIFIED_DRAWS], runs[MISSPECIFIED_DRAWS:]
     fitted = [r for r in runs if "error" not in r]
     print(f"calibration: {len(runs)} tests (seed set {args.seed}) made at "
           f"{args.made_elements} elements, fitted at {FIT_ELEMENTS}; {len(fitted)} fitted, "
@@ -272,14 +276,17 @@ def main() -> None:
         status = check(f"calibration: {name} ranks uniform (p)", p, UNIFORM_P, at_least=True)
         print(f"calibration: {name}'s ranks (of {RANKS + 1}) over {len(ranks)} tests, in "
               f"{BINS} bins: {counts.tolist()}; chi-square p {p:.3f} ({status} > {UNIFORM_P})")
-    differs = "error" not in odd and not odd["agrees"]
-    status = check("calibration: a recording no law reproduces is flagged", float(differs), 1.0,
-                   at_least=True)
+    flagged = sum("error" not in r and not r["agrees"] for r in odd)
+    status = check("calibration: a recording no law reproduces is flagged, share of draws",
+                   flagged / len(odd), 1.0, at_least=True)
     print(f"calibration: a run-in that turns (fs 0.8, then 1.33 at the second and third gross "
-          f"slips, then 0.8), which no law fitted reproduces: chosen {odd.get('chosen')}, its "
-          "predictive "
-          + (f"differs on {', '.join(odd['differs'])}" if differs else "agrees everywhere")
-          + f" ({status})")
+          f"slips, then 0.8), which no law fitted reproduces, flagged in {flagged} of "
+          f"{len(odd)} draws ({status} all; the first draw's seed is the one its turn was "
+          "chosen on): " + "; ".join(
+              f"chosen {r.get('chosen')}, predictive "
+              + (f"differs on {', '.join(r['differs'])}" if r.get("differs")
+                 else "agrees everywhere" if "error" not in r else f"error {r['error']}")
+              for r in odd))
     seconds = [r["seconds_fit"] for r in fitted]
     if seconds:
         median = float(np.median(seconds))
