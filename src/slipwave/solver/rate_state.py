@@ -1,0 +1,224 @@
+"""Rate-and-state friction (Dieterich 1979; Ruina 1983), regularised at vanishing slip rate.
+
+The friction coefficient depends on the slip rate v and a state theta (the
+contacts' age, a time):
+
+    mu = mu0 + a ln(v / v0) + b ln(v0 theta / Dc)
+
+and theta evolves by the aging law, d theta / dt = 1 - v theta / Dc, or the slip
+law, d theta / dt = -(v theta / Dc) ln(v theta / Dc). At vanishing rate the
+logarithm has no limit; the regularised form (Rice and Ben-Zion 1996; Lapusta et
+al. 2000)
+
+    mu = a asinh(v / (2 v0) exp(psi / a)),  psi = mu0 + b ln(v0 theta / Dc)
+
+equals it to within exp(-2 psi / a) (below 1e-20 here) wherever v is not minute,
+and is odd in v, so that a slider at rest carries no friction but what holds it.
+The state is carried as its logarithm, which the aging law sends over tens of
+decades in a long stick.
+
+>>> law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4)
+>>> round(float(steady_friction(law, 1e-5)), 6)  # 10 v0: (a - b) ln 10 below mu0
+0.388487
+>>> round(critical_stiffness(law, normal_load=0.3), 1)  # N/m
+1500.0
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from slipwave.errors import SlipwaveError
+
+REFERENCE_SPEED = 1e-6
+"""The reference slip rate v0 at which ``mu0`` is the steady friction, m/s."""
+
+EVOLUTION_LAWS = ("aging", "slip")
+"""The state's evolution laws: Dieterich's aging law and Ruina's slip law."""
+
+
+@dataclass(frozen=True)
+class RateState:
+    """A rate-and-state friction law.
+
+    Attributes
+    ----------
+    a
+        The direct effect: the step in friction per e-fold of the slip rate at fixed state.
+    b
+        The evolution effect: the step in steady friction per e-fold of the state.
+    dc
+        The memory length over which the state renews by slip, m.
+    mu0
+        The steady friction coefficient at the reference rate ``v0``.
+    v0
+        The reference slip rate, m/s.
+    evolution
+        ``"aging"`` (Dieterich) or ``"slip"`` (Ruina).
+
+    """
+
+    a: float
+    b: float
+    dc: float
+    mu0: float
+    v0: float = REFERENCE_SPEED
+    evolution: Literal["aging", "slip"] = "aging"
+
+    def __post_init__(self) -> None:
+        if not (self.a > 0 and self.b >= 0 and self.dc > 0 and self.v0 > 0
+                and np.isfinite([self.a, self.b, self.dc, self.mu0, self.v0]).all()):
+            raise SlipwaveError(
+                "rate-and-state friction needs a > 0, b >= 0, dc > 0 and v0 > 0, got "
+                f"a={self.a}, b={self.b}, dc={self.dc}, v0={self.v0}")
+        if self.evolution not in EVOLUTION_LAWS:
+            raise SlipwaveError(
+                f"unknown state evolution {self.evolution!r}: one of {', '.join(EVOLUTION_LAWS)}")
+
+
+def _psi(law: RateState, log_state: np.ndarray | float) -> np.ndarray:
+    """The state's part of the friction, mu0 + b ln(v0 theta / dc)."""
+    return law.mu0 + law.b * (np.log(law.v0 / law.dc) + np.asarray(log_state, dtype=float))
+
+
+def friction(law: RateState, speed: np.ndarray | float,
+             log_state: np.ndarray | float) -> np.ndarray:
+    """The (regularised) friction coefficient.
+
+    Parameters
+    ----------
+    law
+        The friction law.
+    speed
+        The slip rate, m/s (signed: the friction takes its sign).
+    log_state
+        The natural logarithm of the state theta (theta in s).
+
+    Returns
+    -------
+    numpy.ndarray
+        The friction coefficient.
+    """
+    scale = np.exp(np.minimum(_psi(law, log_state) / law.a, 700.0)) / (2.0 * law.v0)
+    return law.a * np.arcsinh(np.asarray(speed, dtype=float) * scale)
+
+
+def slip_rate(law: RateState, friction_coefficient: np.ndarray | float,
+              log_state: np.ndarray | float) -> np.ndarray:
+    """The slip rate at which the law gives a friction coefficient: :func:`friction`'s inverse.
+
+    Parameters
+    ----------
+    law
+        The friction law.
+    friction_coefficient
+        The friction the interface carries (the spring's force over the normal load).
+    log_state
+        The natural logarithm of the state theta (theta in s).
+
+    Returns
+    -------
+    numpy.ndarray
+        The slip rate, m/s.
+    """
+    mu = np.asarray(friction_coefficient, dtype=float)
+    # 2 v0 exp(-psi/a) sinh(mu/a), formed in logarithms: both exponents reach hundreds
+    magnitude = law.v0 * np.exp(np.minimum((np.abs(mu) - _psi(law, log_state)) / law.a, 700.0))
+    return np.sign(mu) * magnitude * -np.expm1(-2.0 * np.abs(mu) / law.a)
+
+
+def state_rate(law: RateState, speed: np.ndarray | float,
+               log_state: np.ndarray | float) -> np.ndarray:
+    """The time derivative of the state's logarithm, d ln(theta) / dt, 1/s.
+
+    Parameters
+    ----------
+    law
+        The friction law (its ``evolution`` chooses the law).
+    speed
+        The slip rate, m/s (its magnitude renews the state).
+    log_state
+        The natural logarithm of the state theta (theta in s).
+
+    Returns
+    -------
+    numpy.ndarray
+        d ln(theta) / dt.
+    """
+    rate = np.abs(np.asarray(speed, dtype=float)) / law.dc
+    log_state = np.asarray(log_state, dtype=float)
+    if law.evolution == "aging":
+        return np.exp(-log_state) - rate
+    # slip law: -(v theta / dc) ln(v theta / dc) / theta; at v = 0 the state is frozen
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_ratio = np.log(np.abs(np.asarray(speed, dtype=float)) * np.exp(log_state) / law.dc)
+        return np.where(rate > 0, -rate * log_ratio, 0.0)
+
+
+def steady_state(law: RateState, speed: float) -> float:
+    """The logarithm of the steady state at a slip rate, ln(dc / v).
+
+    Parameters
+    ----------
+    law
+        The friction law.
+    speed
+        The steady slip rate, m/s (> 0).
+
+    Returns
+    -------
+    float
+        ln(theta_ss).
+    """
+    return float(np.log(law.dc / speed))
+
+
+def steady_friction(law: RateState, speed: np.ndarray | float) -> np.ndarray:
+    """The friction in steady sliding, about mu0 + (a - b) ln(v / v0).
+
+    Parameters
+    ----------
+    law
+        The friction law.
+    speed
+        The steady slip rate, m/s (> 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        The steady friction coefficient.
+    """
+    speed = np.asarray(speed, dtype=float)
+    return friction(law, speed, np.log(law.dc / speed))
+
+
+def critical_stiffness(law: RateState, normal_load: float, *, mass: float = 0.0,
+                       drive_speed: float = 0.0) -> float:
+    """The stiffness below which steady sliding is unstable (stick-slip), N/m.
+
+    K_c = N (b - a) / Dc [1 + M V^2 / (N a Dc)] (Ruina 1983; Rice and Ruina 1983, for
+    a slider of mass M under a normal load N driven at V): the Routh-Hurwitz bound of
+    the law linearised about steady sliding, the same for the aging and the slip law.
+    Negative (never unstable) when b < a.
+
+    Parameters
+    ----------
+    law
+        The friction law.
+    normal_load
+        The normal load N, newtons.
+    mass
+        The slider's mass M, kg (0: quasi-static).
+    drive_speed
+        The steady sliding speed V, m/s.
+
+    Returns
+    -------
+    float
+        K_c, N/m.
+    """
+    inertia = mass * drive_speed**2 / (normal_load * law.a * law.dc)
+    return normal_load * (law.b - law.a) / law.dc * (1.0 + inertia)

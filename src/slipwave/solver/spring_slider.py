@@ -1,0 +1,358 @@
+"""A spring-slider with inertia under rate-and-state friction: the classical friction bench.
+
+A slider of mass M under a normal load N is pulled through a spring of
+stiffness K whose far end moves at the drive speed V (Heslot et al. 1994;
+Colas et al. 2019). With f the spring's force over the normal load (the
+records' F / N), v the slider's speed and theta the interface's state:
+
+    df/dt = (K / N) (V - v)
+    M dv/dt = N (f - mu(v, theta))
+    d ln(theta)/dt  by the law's evolution
+
+Stick is the regularised law's slow creep, so the system is stiff: at a creep
+of 1e-14 m/s the slider's inertia relaxes in under a picosecond, and an arrest
+asks an integrator for steps that small. Below a thousandth of the drive's speed
+(``INERTIA_SPEED_FRACTION``) the slider is therefore taken as massless (mu = f
+at every instant; its inertial time M v / (N a) is then under a microsecond),
+and above it inertia is kept, the switch made where the speed crosses that
+bound (scipy's event location). Each stretch is integrated by scipy's LSODA,
+which switches between Adams and BDF steps as the stiffness changes, with the
+analytic Jacobian; a stretch LSODA gives up on is integrated again by Radau,
+and the record's ``integrators`` attribute says which ran. With M = 0 the
+slider is massless throughout, the form of rsfmodel's velocity steps.
+
+>>> from slipwave.solver.rate_state import RateState
+>>> law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4)
+>>> bench = SpringSlider(mass=0.0307, stiffness=5000.0, drive_speed=1e-5, normal_load=0.301)
+>>> ds = simulate_spring_slider(bench, law, duration=1.0, sample_rate=100.0)
+>>> round(float(ds.friction_ratio[-1]), 4)  # stiffer than K_c: it keeps sliding steadily
+0.3885
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import xarray as xr
+from scipy.integrate import solve_ivp
+
+from slipwave import __version__
+from slipwave.defaults import CONVENTIONS
+from slipwave.errors import SlipwaveError
+from slipwave.solver.rate_state import (
+    RateState,
+    slip_rate,
+    state_rate,
+    steady_friction,
+    steady_state,
+)
+
+RELATIVE_TOLERANCE = 1e-8
+"""The integrator's relative tolerance on each state variable."""
+
+ABSOLUTE_TOLERANCE = 1e-10
+"""The integrator's absolute tolerance on the force ratio and ln(theta)."""
+
+SHORTFALL_TOLERANCE = 1e-12
+"""The integrator's absolute tolerance on the friction's shortfall on the spring's force
+(M dv/dt / N): LSODA gave up more often with 1e-10 and with 1e-14."""
+
+INTEGRATORS = ("LSODA", "Radau")
+"""scipy's methods, in the order tried on each stretch of the integration."""
+
+INERTIA_SPEED_FRACTION = 1e-3
+"""Below this fraction of the drive's speed the slider's inertia is left out (M = 0): its
+relaxation time M v / (N a) is then under a microsecond at the Colas bench's slowest
+drive, and with it an arrest would take the integrator picosecond steps."""
+
+
+@dataclass(frozen=True)
+class SpringSlider:
+    """A spring-slider bench.
+
+    Attributes
+    ----------
+    mass
+        The slider's mass M, kg (0: quasi-static).
+    stiffness
+        The spring's stiffness K, N/m.
+    drive_speed
+        The speed V of the spring's far end, m/s.
+    normal_load
+        The normal load N, newtons (M g for a slider lying on a flat).
+
+    """
+
+    mass: float
+    stiffness: float
+    drive_speed: float
+    normal_load: float
+
+    def __post_init__(self) -> None:
+        if not (self.mass >= 0 and self.stiffness > 0 and self.drive_speed >= 0
+                and self.normal_load > 0):
+            raise SlipwaveError(
+                "a spring-slider needs mass >= 0, stiffness > 0, drive speed >= 0 and normal "
+                f"load > 0, got {asdict(self)}")
+
+
+_EXPONENT_CAP = 300.0  # exp() arguments are capped here: an integrator's trial state may
+# ask for absurd speeds, and exp(300) times any factor of the system stays finite
+
+
+def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type: ignore[no-untyped-def]
+    """Right-hand side and Jacobian of (f, f - mu, ln theta) for a slider with mass.
+
+    The slider's speed is carried by the friction mu it raises, v = 2 v0 exp(-psi/a)
+    sinh(mu / a), and mu by its shortfall on the spring's force, e = f - mu, which
+    is M dv/dt / N: in a stick v is a creep of 1e-14 m/s or less that no absolute
+    tolerance resolves and e is nothing, while the slip's e is of order 0.1.
+    """
+    a, b, dc, v0 = law.a, law.b, law.dc, law.v0
+    loading, push = bench.stiffness / bench.normal_load, bench.normal_load / bench.mass
+    offset = law.mu0 + b * math.log(v0 / dc)
+    aging = law.evolution == "aging"
+
+    def parts(y: np.ndarray) -> tuple[float, float, float, float, float, float]:
+        """The speed, d mu/dv, dv/d mu, tanh(mu/a), the state's rate, d(rate)/d|v|."""
+        mu, log_state = y[0] - y[1], y[2]
+        psi = offset + b * log_state
+        level = abs(mu) / a
+        speed = math.copysign(v0 * math.exp(min(level - psi / a, _EXPONENT_CAP))
+                              * -math.expm1(-2.0 * level), mu)
+        stiffness = a / v0 * math.exp(min(psi / a - level, _EXPONENT_CAP)) / (
+            1.0 + math.exp(-2.0 * level))
+        compliance = v0 / a * math.exp(min(level - psi / a, _EXPONENT_CAP)) * (
+            1.0 + math.exp(-2.0 * level))
+        if aging:
+            rate, slope = math.exp(min(-log_state, _EXPONENT_CAP)) - abs(speed) / dc, -1.0 / dc
+        elif speed == 0.0:
+            rate, slope = 0.0, 0.0
+        else:
+            log_ratio = math.log(abs(speed) / dc) + log_state
+            rate, slope = -abs(speed) / dc * log_ratio, -(log_ratio + 1.0) / dc
+        return speed, stiffness, compliance, math.tanh(mu / a), rate, slope
+
+    def rhs(_: float, y: np.ndarray) -> np.ndarray:
+        speed, stiffness, _, direction, rate, _ = parts(y)
+        loading_rate = loading * (drive_speed - speed)
+        friction_rate = push * stiffness * y[1] + b * direction * rate
+        return np.array([loading_rate, loading_rate - friction_rate, rate])
+
+    def jacobian(_: float, y: np.ndarray) -> np.ndarray:
+        shortfall, log_state = y[1], y[2]
+        speed, stiffness, dv_dmu, direction, rate, slope = parts(y)
+        dv_dstate = -b / a * speed
+        sign = math.copysign(1.0, speed)
+        drate_dmu = slope * sign * dv_dmu
+        drate_dstate = slope * sign * dv_dstate + (
+            -math.exp(min(-log_state, _EXPONENT_CAP)) if aging else -abs(speed) / dc)
+        # the friction's rate, push stiffness e + b tanh(mu/a) rate, in mu, e and ln theta
+        friction_dmu = (-push * stiffness * direction / a * shortfall
+                        + b / a * (1.0 - direction**2) * rate + b * direction * drate_dmu)
+        friction_de = push * stiffness
+        friction_dstate = push * stiffness * b / a * shortfall + b * direction * drate_dstate
+        loading_row = np.array([-loading * dv_dmu, loading * dv_dmu, -loading * dv_dstate])
+        friction_row = np.array([friction_dmu, friction_de - friction_dmu, friction_dstate])
+        return np.array([loading_row, loading_row - friction_row,
+                         [drate_dmu, -drate_dmu, drate_dstate]])
+
+    return rhs, jacobian
+
+
+def _quasi_static(bench: SpringSlider, law: RateState, drive_speed: float):  # type: ignore[no-untyped-def]
+    """Right-hand side of (f, ln theta) for a massless slider (mu = f at every instant)."""
+    loading = bench.stiffness / bench.normal_load
+
+    def rhs(_: float, y: np.ndarray) -> np.ndarray:
+        f, log_state = y
+        v = float(slip_rate(law, f, log_state))
+        return np.array([loading * (drive_speed - v), float(state_rate(law, v, log_state))])
+
+    return rhs, None
+
+
+def simulate_spring_slider(
+    bench: SpringSlider,
+    law: RateState,
+    *,
+    duration: float,
+    sample_rate: float,
+    speed_steps: Sequence[tuple[float, float]] = (),
+    initial_ratio: float | None = None,
+    initial_log_state: float | None = None,
+) -> xr.Dataset:
+    """Drive a spring-slider and record it at a constant sampling rate.
+
+    Parameters
+    ----------
+    bench
+        The slider, its spring and its drive.
+    law
+        The interface's friction law.
+    duration
+        The recorded time, s (the record starts at 0).
+    sample_rate
+        Samples per second.
+    speed_steps
+        ``(time, speed)`` pairs: from each time on, the drive moves at that speed (m/s)
+        instead of ``bench.drive_speed`` (a velocity-step test).
+    initial_ratio
+        The spring's force over the normal load at time 0; steady sliding at the drive
+        speed by default.
+    initial_log_state
+        ln(theta) at time 0 (theta in s); the steady state at the drive speed by default.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``friction_ratio`` (the spring's force over the normal load), ``slider_speed``,
+        ``log_state``, ``friction`` (the law's coefficient), ``slip`` and
+        ``drive_displacement`` over ``time``, with the bench and the law as attributes.
+
+    Raises
+    ------
+    SlipwaveError
+        When the bench's numbers are out of range, or when both integrators fail (the
+        message says why and when).
+    """
+    if not (duration > 0 and sample_rate > 0):
+        raise SlipwaveError(f"duration and sample rate must be > 0, got {duration}, {sample_rate}")
+    times = np.arange(int(np.floor(duration * sample_rate + 1e-9)) + 1) / sample_rate
+    pieces = _drive_pieces(bench.drive_speed, speed_steps, float(times[-1]))
+    start_speed = pieces[0][2]
+    steady_speed = start_speed if start_speed > 0 else law.v0
+    log_state = steady_state(law, steady_speed) if initial_log_state is None else initial_log_state
+    ratio = float(steady_friction(law, steady_speed)) if initial_ratio is None else initial_ratio
+    # the slider starts at the speed at which the law carries the spring's force
+    state = np.array([ratio, log_state])
+    inertial = bench.mass > 0 and float(slip_rate(law, ratio, log_state)) > _slow(law, pieces[0][2])
+    columns, used = [], set()
+    for number, (begin, end, drive_speed) in enumerate(pieces):
+        last = number == len(pieces) - 1
+        inside = times[(times >= begin) & ((times <= end) if last else (times < end))]
+        start, stretch = begin, inside
+        while True:
+            state, inertial, start, rows, method = _integrate(
+                bench, law, drive_speed, state, inertial, start, end, stretch)
+            used.add(method)
+            columns.append(rows)
+            stretch = stretch[rows.shape[1]:]
+            if start >= end:
+                break
+    ds = _to_dataset(bench, law, times, np.concatenate(columns, axis=1), pieces)
+    ds.attrs["integrators"] = " ".join(sorted(used))
+    return ds
+
+
+def _slow(law: RateState, drive_speed: float) -> float:
+    """The speed below which the slider's inertia is left out, m/s."""
+    return INERTIA_SPEED_FRACTION * (drive_speed if drive_speed > 0 else law.v0)
+
+
+def _integrate(bench: SpringSlider, law: RateState, drive_speed: float, state: np.ndarray,
+               inertial: bool, begin: float, end: float, samples: np.ndarray,
+               ) -> tuple[np.ndarray, bool, float, np.ndarray, str]:
+    """Integrate from ``begin`` until ``end`` or until the slider crosses the slow speed.
+
+    Returns the (f, ln theta) state where it stopped, whether inertia is kept from there,
+    the time it stopped, the rows (f, f - mu, ln theta) at the samples passed, and the
+    method that ran.
+    """
+    slow = _slow(law, drive_speed)
+    if inertial:
+        rhs, jacobian = _inertial(bench, law, drive_speed)
+        start = np.array([state[0], 0.0, state[1]])
+        tolerance = [ABSOLUTE_TOLERANCE, SHORTFALL_TOLERANCE, ABSOLUTE_TOLERANCE]
+
+        def crossing(_: float, y: np.ndarray) -> float:
+            return float(slip_rate(law, y[0] - y[1], y[2])) - slow
+    else:
+        rhs, jacobian = _quasi_static(bench, law, drive_speed)
+        start, tolerance = state, [ABSOLUTE_TOLERANCE, ABSOLUTE_TOLERANCE]
+
+        def crossing(_: float, y: np.ndarray) -> float:
+            return float(slip_rate(law, y[0], y[1])) - slow
+    crossing.terminal = True  # type: ignore[attr-defined]
+    # with inertia, a slider slowing down leaves it; without, one speeding up takes it
+    crossing.direction = -1.0 if inertial else 1.0  # type: ignore[attr-defined]
+    events = crossing if bench.mass > 0 else None
+    evaluated = np.append(samples, end) if samples.size == 0 or samples[-1] < end else samples
+    for method in INTEGRATORS:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # LSODA's complaints: its status says it all
+            solution = solve_ivp(rhs, (begin, end), start, method=method, jac=jacobian,
+                                 t_eval=evaluated, events=events, rtol=RELATIVE_TOLERANCE,
+                                 atol=tolerance)
+        if solution.status >= 0:
+            break
+    else:
+        raise SlipwaveError(
+            f"the spring-slider's integration failed at t = {solution.t[-1]:.6g} s of "
+            f"[{begin:.6g}, {end:.6g}] s: {solution.message}")
+    rows = solution.y[:, :min(samples.size, solution.t.size)]
+    if solution.status == 1:  # the slider crossed the slow speed
+        stop, last = float(solution.t_events[0][0]), solution.y_events[0][0]
+        rows = rows[:, solution.t[:rows.shape[1]] <= stop]
+    else:
+        stop, last = end, solution.y[:, -1]
+    if not inertial:
+        rows = np.vstack([rows[0], np.zeros(rows.shape[1]), rows[1]])
+    # the state carried on: the spring's force and the state; a slider that slows below
+    # the slow speed gives up its (picosecond-scale) inertial shortfall
+    carried = np.array([last[0], last[-1]])
+    return carried, (not inertial) if solution.status == 1 else inertial, stop, rows, method
+
+
+def _drive_pieces(drive_speed: float, speed_steps: Sequence[tuple[float, float]],
+                  end: float) -> list[tuple[float, float, float]]:
+    """(begin, end, drive speed) of each stretch of constant drive speed."""
+    steps = sorted((float(t), float(v)) for t, v in speed_steps)
+    if any(v < 0 for _, v in steps):
+        raise SlipwaveError(f"a drive speed must be >= 0, got the steps {steps}")
+    edges = [0.0] + [t for t, _ in steps if 0.0 < t < end] + [end]
+    speeds = [drive_speed] + [v for t, v in steps if 0.0 < t < end]
+    if steps and steps[0][0] <= 0.0:
+        speeds[0] = [v for t, v in steps if t <= 0.0][-1]
+    return list(zip(edges[:-1], edges[1:], speeds, strict=True))
+
+
+def _to_dataset(bench: SpringSlider, law: RateState, times: np.ndarray, values: np.ndarray,
+                pieces: list[tuple[float, float, float]]) -> xr.Dataset:
+    """The record as a Dataset with CF attributes."""
+    ratio, log_state = values[0], values[-1]
+    mu = ratio - values[1]
+    speed = slip_rate(law, mu, log_state)
+    drive = np.zeros_like(times)
+    for begin, end, drive_speed in pieces:
+        inside = times > begin
+        drive[inside] += drive_speed * (np.minimum(times[inside], end) - begin)
+    # the slider moved by what the drive moved less what the spring took up
+    slip = drive - bench.normal_load / bench.stiffness * (ratio - ratio[0])
+    variables = {
+        "friction_ratio": (ratio, "1", "the spring's force over the normal load"),
+        "slider_speed": (speed, "m s-1", "the slider's speed"),
+        "log_state": (log_state, "1", "natural logarithm of the state theta in seconds"),
+        "friction": (mu, "1", "the law's friction coefficient"),
+        "slip": (slip, "m", "the slider's displacement"),
+        "drive_displacement": (drive, "m", "the displacement of the spring's far end"),
+    }
+    ds = xr.Dataset(
+        {name: ("time", data, {"units": units, "long_name": meaning})
+         for name, (data, units, meaning) in variables.items()},
+        coords={"time": ("time", times, {"units": "s", "long_name": "time", "axis": "T"})},
+    )
+    ds.attrs = {
+        "Conventions": CONVENTIONS,
+        "title": "spring-slider under rate-and-state friction",
+        "source": f"slipwave {__version__} spring_slider",
+        **{f"bench_{name}": value for name, value in asdict(bench).items()},
+        **{f"law_{name}": value for name, value in asdict(law).items()},
+        "speed_steps": np.array([speed for _, _, speed in pieces]),
+        "speed_step_times": np.array([begin for begin, _, _ in pieces]),
+    }
+    return ds

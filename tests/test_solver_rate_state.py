@@ -1,0 +1,193 @@
+"""Rate-and-state friction and the spring-slider: rsfmodel's cases, the stability boundary."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from slipwave.errors import SlipwaveError
+from slipwave.solver.rate_state import (
+    RateState,
+    critical_stiffness,
+    friction,
+    slip_rate,
+    state_rate,
+    steady_friction,
+)
+from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
+
+# rsfmodel's velocity steps (jrleeman/rsfmodel, tests/rsf_tests.py, MIT licence, (c) 2015
+# John Leeman): mu0 0.6, v0 1, k 1e-3 per unit length, Dc 10, the load point stepped
+# from 1 to 10 at t = 10, sampled each unit of time from 0 to 40. rsfmodel integrates the
+# unregularised law with odeint at rtol 1e-12; the regularisation differs by exp(-240).
+DIETERICH = {  # aging law, a 0.005, b 0.01
+    "friction": [
+        0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.60720485,
+        0.60186637, 0.5840091, 0.58563096, 0.58899543, 0.58998186, 0.58879751, 0.58803412,
+        0.58825653, 0.58858313, 0.58860319, 0.58848625, 0.58844431, 0.58847472, 0.58849913,
+        0.58849522, 0.58848506, 0.58848348, 0.58848674, 0.5884883, 0.58848756, 0.58848677,
+        0.5884868, 0.58848711, 0.58848718, 0.5884871, 0.58848704, 0.58848706, 0.58848708,
+        0.58848708],
+    "state": [
+        10., 10., 10., 10., 10., 10., 10., 10., 10., 10., 10., 8.39993716, 2.2355129,
+        0.54248237, 0.94936884, 1.21163659, 1.13491241, 0.96889358, 0.94896281, 0.99777122,
+        1.01876822, 1.00674821, 0.99515136, 0.9961297, 1.00063816, 1.00161995, 1.00024914,
+        0.9994787, 0.99975352, 1.00011844, 1.00012598, 0.99999394, 0.99995185, 0.9999879,
+        1.00001411, 1.00000865, 0.99999738, 0.99999604, 0.99999978, 1.00000139, 1.00000049],
+    "slider_speed": [
+        1., 1., 1., 1., 1., 1., 1., 1., 1., 1., 1., 5.98760938, 29.06408439, 13.87639287,
+        6.26688086, 7.54067754, 10.46913416, 11.33475717, 10.14281987, 9.59208664,
+        9.82182937, 10.0981912, 10.09601357, 9.99203098, 9.9626088, 9.99173502, 10.01132361,
+        10.00641151, 9.99774235, 9.99697087, 9.99992839, 10.00109331, 10.00035175,
+        9.99970252, 9.99978205, 10.00004456, 10.00009344, 10.00001142, 9.99996902,
+        9.99998658, 10.0000074],
+}
+RUINA = {  # slip law, a 0.01, b 0.005
+    "friction": [
+        0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.60839299, 0.6146288,
+        0.61663335, 0.61451424, 0.61239234, 0.61152559, 0.61133979, 0.61138186, 0.61145348,
+        0.61149781, 0.61151494, 0.61151781, 0.61151612, 0.61151421, 0.61151317, 0.61151282,
+        0.61151279, 0.61151285, 0.6115129, 0.61151292, 0.61151293, 0.61151293, 0.61151293,
+        0.61151293, 0.61151293, 0.61151293, 0.61151293, 0.61151293, 0.61151293, 0.61151293],
+    "slider_speed": [
+        1., 1., 1., 1., 1., 1., 1., 1., 1., 1., 1., 2.40532918, 5.50394141, 10.60027612,
+        12.69404325, 11.42856179, 10.42488359, 10.02133885, 9.92544961, 9.93937282,
+        9.97125078, 9.99210081, 10.00053876, 10.00216595, 10.00149419, 10.00063054,
+        10.00013668, 9.99996121, 9.99994058, 9.99996436, 9.99998669, 9.99999803, 10.0000015,
+        10.00000156, 10.00000083, 10.00000027, 10.00000002, 9.99999995, 9.99999996,
+        9.99999998, 9.99999999],
+}
+NORMAL_LOAD, MASS = 0.301, 0.0307  # N, kg: the Colas slider
+
+
+def _velocity_step(law: RateState):  # type: ignore[no-untyped-def]
+    bench = SpringSlider(mass=0.0, stiffness=1e-3, drive_speed=1.0, normal_load=1.0)
+    return simulate_spring_slider(bench, law, duration=40.0, sample_rate=1.0,
+                                  speed_steps=[(10.0, 10.0)])
+
+
+@pytest.mark.parametrize(("evolution", "a", "b", "truth"),
+                         [("aging", 0.005, 0.01, DIETERICH), ("slip", 0.01, 0.005, RUINA)])
+def test_velocity_steps_match_rsfmodel(evolution: str, a: float, b: float,
+                                       truth: dict[str, list[float]]) -> None:
+    law = RateState(a=a, b=b, dc=10.0, mu0=0.6, v0=1.0, evolution=evolution)  # type: ignore[arg-type]
+    ds = _velocity_step(law)
+    np.testing.assert_allclose(ds.friction_ratio, truth["friction"], rtol=0, atol=2e-8)
+    np.testing.assert_allclose(ds.slider_speed, truth["slider_speed"], rtol=1e-6)
+    if "state" in truth:
+        np.testing.assert_allclose(np.exp(ds.log_state), truth["state"], rtol=1e-6)
+    np.testing.assert_allclose(ds.drive_displacement[[10, 11, 40]], [10.0, 20.0, 310.0])
+
+
+def test_regularised_law_is_the_logarithmic_one_away_from_rest() -> None:
+    law = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.4)
+    speed, log_state = np.geomspace(1e-9, 1.0, 7), np.linspace(-8.0, 6.0, 7)
+    logarithmic = (law.mu0 + law.a * np.log(speed / law.v0)
+                   + law.b * np.log(law.v0 * np.exp(log_state) / law.dc))
+    np.testing.assert_allclose(friction(law, speed, log_state), logarithmic, rtol=1e-12)
+    np.testing.assert_allclose(slip_rate(law, logarithmic, log_state), speed, rtol=1e-10)
+    # odd in the speed; nothing at rest
+    np.testing.assert_allclose(friction(law, -speed, log_state), -logarithmic, rtol=1e-12)
+    assert friction(law, 0.0, 3.0) == 0.0
+    # steady state: mu0 + (a - b) ln(v / v0); the aging state grows 1/theta at rest
+    np.testing.assert_allclose(steady_friction(law, [1e-6, 1e-4]),
+                               [0.4, 0.4 - 0.005 * np.log(100.0)], rtol=1e-12)
+    assert state_rate(law, 0.0, np.log(5.0)) == pytest.approx(0.2)
+    slip = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.4, evolution="slip")
+    assert state_rate(slip, 0.0, 3.0) == 0.0
+    assert state_rate(slip, 1e-6, np.log(2.0)) == pytest.approx(0.0, abs=1e-12)
+
+
+def _linear_modes(stiffness: float, law: RateState, mass: float, speed: float) -> np.ndarray:
+    """Roots of the law linearised about steady sliding (either evolution law).
+
+    (M/N) Dc s^3 + (M V / N + a Dc / V) s^2 + (a - b + K Dc / N) s + K V / N = 0.
+    """
+    m, k = mass / NORMAL_LOAD, stiffness / NORMAL_LOAD
+    return np.roots([m * law.dc, m * speed + law.a * law.dc / speed,
+                     law.a - law.b + k * law.dc, k * speed])
+
+
+def _oscillation_growth(stiffness: float, law: RateState, mass: float, speed: float) -> float:
+    """The ratio of the spring force's swing in the last tenth of a run to the first's."""
+    bench = SpringSlider(mass=mass, stiffness=stiffness, drive_speed=speed,
+                         normal_load=NORMAL_LOAD)
+    steady = float(steady_friction(law, speed))
+    mode = max(_linear_modes(stiffness, law, mass, speed), key=lambda root: root.imag)
+    period = 2 * np.pi / mode.imag
+    duration = max(12 * period, 2.5 / abs(mode.real))  # long enough to grow or decay e^2
+    ds = simulate_spring_slider(bench, law, duration=duration, sample_rate=100 / period,
+                                initial_ratio=steady - 1e-5)
+    swing = np.abs(ds.friction_ratio.values - steady)
+    tenth = swing.size // 10
+    return float(swing[-tenth:].max() / swing[:tenth].max())
+
+
+@pytest.mark.parametrize("evolution", ["aging", "slip"])
+@pytest.mark.parametrize(("mass", "speed"), [(0.0, 1e-5), (MASS, 3.1e-4)])
+def test_steady_sliding_loses_stability_at_the_critical_stiffness(
+        evolution: str, mass: float, speed: float) -> None:
+    # K_c = N (b - a) / Dc (1 + M V^2 / (N a Dc)): 1505 N/m quasi-static; at 0.31 mm/s
+    # the Colas slider's inertia doubles it (2980 N/m)
+    law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4, evolution=evolution)  # type: ignore[arg-type]
+    critical = critical_stiffness(law, NORMAL_LOAD, mass=mass, drive_speed=speed)
+    assert max(_linear_modes(0.999 * critical, law, mass, speed).real) > 0
+    assert max(_linear_modes(1.001 * critical, law, mass, speed).real) < 0
+    assert _oscillation_growth(0.9 * critical, law, mass, speed) > 3.0
+    assert _oscillation_growth(1.1 * critical, law, mass, speed) < 1 / 3.0
+
+
+def test_a_soft_spring_sticks_and_slips() -> None:
+    law = RateState(a=0.01, b=0.02, dc=1e-6, mu0=0.35)
+    bench = SpringSlider(mass=MASS, stiffness=168.0, drive_speed=42e-6, normal_load=NORMAL_LOAD)
+    ds = simulate_spring_slider(bench, law, duration=20.0, sample_rate=2000.0,
+                                initial_ratio=float(steady_friction(law, 42e-6)) - 1e-3)
+    late = ds.sel(time=slice(10.0, None))
+    stuck = late.slider_speed < 0.1 * bench.drive_speed
+    assert 0.5 < float(stuck.mean()) < 1.0  # most of the time stuck, but not all
+    assert float(late.slider_speed.max()) > 100 * bench.drive_speed  # slips are fast
+    # stuck, the spring loads at K V / N
+    rise = np.gradient(late.friction_ratio.values, late.time.values)[stuck.values]
+    assert np.median(rise) == pytest.approx(168.0 * 42e-6 / NORMAL_LOAD, rel=0.02)
+    # the slider moved as far as the drive, less what the spring took up
+    slip = ds.drive_displacement - NORMAL_LOAD / 168.0 * (ds.friction_ratio - ds.friction_ratio[0])
+    np.testing.assert_allclose(ds.slip, slip)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"a": 0.0, "b": 0.01, "dc": 1e-6, "mu0": 0.4}, "a > 0"),
+    ({"a": 0.01, "b": 0.01, "dc": -1.0, "mu0": 0.4}, "dc > 0"),
+    ({"a": 0.01, "b": 0.01, "dc": 1e-6, "mu0": 0.4, "evolution": "nagata"}, "nagata"),
+])
+def test_bad_laws_are_refused(kwargs: dict[str, object], message: str) -> None:
+    with pytest.raises(SlipwaveError, match=message):
+        RateState(**kwargs)  # type: ignore[arg-type]
+
+
+def test_bad_benches_are_refused() -> None:
+    with pytest.raises(SlipwaveError, match="stiffness > 0"):
+        SpringSlider(mass=0.03, stiffness=0.0, drive_speed=1e-5, normal_load=0.3)
+    bench = SpringSlider(mass=0.03, stiffness=100.0, drive_speed=1e-5, normal_load=0.3)
+    law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4)
+    with pytest.raises(SlipwaveError, match="drive speed must be >= 0"):
+        simulate_spring_slider(bench, law, duration=1.0, sample_rate=10.0,
+                               speed_steps=[(0.5, -1e-5)])
+
+
+def test_leaving_out_inertia_in_creep_changes_nothing_measurable() -> None:
+    """Below INERTIA_SPEED_FRACTION of the drive the slider is taken as massless; the whole
+    record, integrated with inertia throughout by Radau at tight tolerances, agrees."""
+    from scipy.integrate import solve_ivp
+
+    from slipwave.solver import spring_slider
+
+    law = RateState(a=0.01, b=0.02, dc=1e-6, mu0=0.35)
+    bench = SpringSlider(mass=MASS, stiffness=168.0, drive_speed=1.1e-3, normal_load=NORMAL_LOAD)
+    start = float(steady_friction(law, 1.1e-3)) - 1e-3
+    ds = simulate_spring_slider(bench, law, duration=1.0, sample_rate=2000.0, initial_ratio=start)
+    rhs, jacobian = spring_slider._inertial(bench, law, 1.1e-3)
+    whole = solve_ivp(rhs, (0.0, 1.0), [start, 0.0, np.log(law.dc / 1.1e-3)], method="Radau",
+                      jac=jacobian, t_eval=ds.time.values, rtol=1e-10, atol=[1e-12, 1e-14, 1e-12])
+    assert whole.status == 0
+    assert (ds.slider_speed < 1e-3 * bench.drive_speed).any()  # it did stick
+    np.testing.assert_allclose(ds.friction_ratio, whole.y[0], rtol=0, atol=1e-4)
