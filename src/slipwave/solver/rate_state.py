@@ -36,6 +36,11 @@ from slipwave.errors import SlipwaveError
 REFERENCE_SPEED = 1e-6
 """The reference slip rate v0 at which ``mu0`` is the steady friction, m/s."""
 
+EXPONENT_CAP = 300.0
+"""Largest argument given to exp(): a trial state of an integrator may ask for absurd
+speeds, and exp(300) times any factor of the spring-slider's equations stays finite. The
+law is exact while psi / a stays below it (a above 0.002 for friction up to 0.6)."""
+
 EVOLUTION_LAWS = ("aging", "slip")
 """The state's evolution laws: Dieterich's aging law and Ruina's slip law."""
 
@@ -102,7 +107,7 @@ def friction(law: RateState, speed: np.ndarray | float,
     numpy.ndarray
         The friction coefficient.
     """
-    scale = np.exp(np.minimum(_psi(law, log_state) / law.a, 700.0)) / (2.0 * law.v0)
+    scale = np.exp(np.minimum(_psi(law, log_state) / law.a, EXPONENT_CAP)) / (2.0 * law.v0)
     return law.a * np.arcsinh(np.asarray(speed, dtype=float) * scale)
 
 
@@ -126,7 +131,8 @@ def slip_rate(law: RateState, friction_coefficient: np.ndarray | float,
     """
     mu = np.asarray(friction_coefficient, dtype=float)
     # 2 v0 exp(-psi/a) sinh(mu/a), formed in logarithms: both exponents reach hundreds
-    magnitude = law.v0 * np.exp(np.minimum((np.abs(mu) - _psi(law, log_state)) / law.a, 700.0))
+    exponent = np.minimum((np.abs(mu) - _psi(law, log_state)) / law.a, EXPONENT_CAP)
+    magnitude = law.v0 * np.exp(exponent)
     return np.sign(mu) * magnitude * -np.expm1(-2.0 * np.abs(mu) / law.a)
 
 

@@ -44,6 +44,7 @@ from slipwave import __version__
 from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
 from slipwave.solver.rate_state import (
+    EXPONENT_CAP,
     RateState,
     slip_rate,
     state_rate,
@@ -100,10 +101,6 @@ class SpringSlider:
                 f"load > 0, got {asdict(self)}")
 
 
-_EXPONENT_CAP = 300.0  # exp() arguments are capped here: an integrator's trial state may
-# ask for absurd speeds, and exp(300) times any factor of the system stays finite
-
-
 def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type: ignore[no-untyped-def]
     """Right-hand side and Jacobian of (f, f - mu, ln theta) for a slider with mass.
 
@@ -122,14 +119,14 @@ def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type:
         mu, log_state = y[0] - y[1], y[2]
         psi = offset + b * log_state
         level = abs(mu) / a
-        speed = math.copysign(v0 * math.exp(min(level - psi / a, _EXPONENT_CAP))
+        speed = math.copysign(v0 * math.exp(min(level - psi / a, EXPONENT_CAP))
                               * -math.expm1(-2.0 * level), mu)
-        stiffness = a / v0 * math.exp(min(psi / a - level, _EXPONENT_CAP)) / (
+        stiffness = a / v0 * math.exp(min(psi / a - level, EXPONENT_CAP)) / (
             1.0 + math.exp(-2.0 * level))
-        compliance = v0 / a * math.exp(min(level - psi / a, _EXPONENT_CAP)) * (
+        compliance = v0 / a * math.exp(min(level - psi / a, EXPONENT_CAP)) * (
             1.0 + math.exp(-2.0 * level))
         if aging:
-            rate, slope = math.exp(min(-log_state, _EXPONENT_CAP)) - abs(speed) / dc, -1.0 / dc
+            rate, slope = math.exp(min(-log_state, EXPONENT_CAP)) - abs(speed) / dc, -1.0 / dc
         elif speed == 0.0:
             rate, slope = 0.0, 0.0
         else:
@@ -150,7 +147,7 @@ def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type:
         sign = math.copysign(1.0, speed)
         drate_dmu = slope * sign * dv_dmu
         drate_dstate = slope * sign * dv_dstate + (
-            -math.exp(min(-log_state, _EXPONENT_CAP)) if aging else -abs(speed) / dc)
+            -math.exp(min(-log_state, EXPONENT_CAP)) if aging else -abs(speed) / dc)
         # the friction's rate, push stiffness e + b tanh(mu/a) rate, in mu, e and ln theta
         friction_dmu = (-push * stiffness * direction / a * shortfall
                         + b / a * (1.0 - direction**2) * rate + b * direction * drate_dmu)
