@@ -304,7 +304,8 @@ def check_config_files(paths: Iterable[str | PathLike[str]],
     Each file's own settings are checked against the config schema, so that an
     error names the file and the line (Snakemake's check of the merged config
     cannot). And Snakemake merges ``--configfile`` files over the workflow's own
-    config: if none of those sets ``tests``, the default campaign would silently run.
+    config: if none of those sets ``tests`` (or ``kind: spring_slider``, a campaign of
+    spring-slider records), the default campaign would silently run.
 
     Parameters
     ----------
@@ -336,11 +337,15 @@ def check_config_files(paths: Iterable[str | PathLike[str]],
         if settings is not None:
             check(content or {}, settings, source=str(path), line_of=line_of)
     given = [Path(p) for p in command_line]
+    # a campaign of its own: slab tests, or spring-slider records (kind spring_slider)
     if given and not any(isinstance(contents.get(path), Mapping)
-                         and contents[path].get("tests") for path in given):
+                         and (contents[path].get("tests")
+                              or contents[path].get("kind") == "spring_slider")
+                         for path in given):
         names = ", ".join(map(str, given))
-        raise ConfigError(f"{names}: no 'tests' entry naming the campaign table; without it "
-                          "the default campaign (config/config.yaml) would run instead")
+        raise ConfigError(f"{names}: no 'tests' entry naming the campaign table (nor kind: "
+                          "spring_slider); without it the default campaign "
+                          "(config/config.yaml) would run instead")
     merged: dict[str, Any] = {}
     for content in contents.values():
         _merge(merged, content or {})

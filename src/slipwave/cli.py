@@ -672,6 +672,79 @@ def _bench(args: argparse.Namespace) -> None:
     print(f"{args.config} -> {args.output} ({table.name})")
 
 
+def _slider_ingest(args: argparse.Namespace) -> None:
+    from slipwave.io import write_dataset
+    from slipwave.io.slider_record import read_slider_record
+    from slipwave.slider_campaign import GRAVITY
+
+    record = read_slider_record(args.mat)
+    mass = args.mass * 1e-3
+    record.attrs.update({
+        "record_id": args.record_id, "role": args.role, "stiffness_n_m": args.stiffness,
+        "drive_speed_m_s": args.drive_speed * 1e-6, "mass_kg": mass,
+        "normal_load_n": args.normal_load if args.normal_load is not None else mass * GRAVITY,
+        "window_s": args.window})
+    write_dataset(record, args.output)
+    print(f"{args.mat} -> {args.output}: {record.sizes['time']} samples")
+
+
+def _slider_fit(args: argparse.Namespace) -> None:
+    import time as clock
+
+    from slipwave.fit.slider import (
+        SliderFitSettings,
+        fit_records,
+        posterior_dataset,
+        posterior_json,
+        record_of,
+    )
+    from slipwave.io import atomic_output, read_dataset, write_dataset
+
+    started = clock.perf_counter()
+    records = [record_of(read_dataset(path, "spring-slider record")) for path in args.records]
+    held_out = [record.name for record, path in zip(records, args.records, strict=True)
+                if read_dataset(path, "spring-slider record").attrs["role"] != "fit"]
+    if held_out:
+        raise SlipwaveError(f"records to predict given to the fit: {', '.join(held_out)}")
+    settings = SliderFitSettings(members=args.members, design=args.design,
+                                 acquisitions=args.acquisitions, exploration=args.exploration,
+                                 samples=args.samples, processes=args.processes, seed=args.seed)
+    posterior = fit_records(records, settings, progress=print)
+    seconds = clock.perf_counter() - started
+    write_dataset(posterior_dataset(posterior, settings, seconds), args.posterior)
+    with atomic_output(args.output) as temporary:
+        temporary.write_text(posterior_json(posterior, settings, seconds), encoding="utf-8")
+    for name, (middle, low, high) in posterior.interval().items():
+        print(f"{name}: {middle:.4g} [{low:.4g}, {high:.4g}]")
+    print(f"{len(records)} records fitted in {seconds:.0f} s -> {args.output}")
+
+
+def _slider_predict(args: argparse.Namespace) -> None:
+    import json
+
+    from slipwave.fit.slider import posterior_of, predict_record, record_of
+    from slipwave.io import atomic_output, read_dataset
+
+    dataset = read_dataset(args.record, "spring-slider record")
+    record = record_of(dataset)
+    posterior = posterior_of(read_dataset(args.posterior, "spring-slider posterior"))
+    prediction = predict_record(record, posterior, args.draws, args.members, args.seed)
+    prediction["role"] = str(dataset.attrs["role"])
+    prediction["fitted_on_it"] = record.name in posterior.records
+    with atomic_output(args.output) as temporary:
+        temporary.write_text(json.dumps(prediction, indent=2), encoding="utf-8")
+    regime = prediction["regime"]
+    print(f"{record.name}: regime predicted {regime['predicted']}, measured "  # type: ignore[index]
+          f"{regime['measured']} -> {args.output}")  # type: ignore[index]
+
+
+def _slider_report(args: argparse.Namespace) -> None:
+    from slipwave.slider_report import write_slider_report
+
+    write_slider_report(args.fit, args.predictions, args.output)
+    print(f"-> {args.output}")
+
+
 def _sawtooth(args: argparse.Namespace) -> None:
     from slipwave.bench.sawtooth import write_sawtooth_campaign
 
@@ -1089,6 +1162,79 @@ def build_parser() -> argparse.ArgumentParser:
     sawtooth.add_argument("--seed", type=_non_negative_int,
                           default=0, help="noise seed (default 0)")
     sawtooth.set_defaults(run=_sawtooth)
+
+    slider_ingest = commands.add_parser(
+        "slider-ingest", help="read a spring-slider record (MAT: t, Fnorm) into CF netCDF",
+        description="Read a spring-slider record's MAT file and store it with its bench "
+        "(stiffness, drive speed, mass, normal load), its role and its windows' length.")
+    slider_ingest.add_argument("mat", type=_input, help="the MAT file (t, Fnorm)")
+    slider_ingest.add_argument("-o", "--output", type=Path, required=True,
+                               help="record netCDF to write")
+    slider_ingest.add_argument("--record-id", required=True, help="the record's identifier")
+    slider_ingest.add_argument("--role", choices=["fit", "predict"], required=True,
+                               help="fit: fitted on; predict: only predicted")
+    slider_ingest.add_argument("--stiffness", type=_positive_float, required=True,
+                               help="the spring's stiffness, N/m")
+    slider_ingest.add_argument("--drive-speed", type=_positive_float, required=True,
+                               help="the drive's speed, um/s")
+    slider_ingest.add_argument("--mass", type=_positive_float, required=True,
+                               help="the slider's mass, g")
+    slider_ingest.add_argument("--normal-load", type=_positive_float, default=None,
+                               help="the normal load, N (default: the slider's weight)")
+    slider_ingest.add_argument("--window", type=_positive_float, required=True,
+                               help="the windows' length, s")
+    slider_ingest.set_defaults(run=_slider_ingest)
+
+    slider_fit = commands.add_parser(
+        "slider-fit", help="fit rate-and-state friction to spring-slider records jointly",
+        description="Fit a, b - a, log10 Dc and mu0 of rate-and-state friction (aging law) "
+        "to the records given, all at once, by a synthetic likelihood over their windows' "
+        "features and a Gaussian-process search (slipwave.fit.slider).")
+    slider_fit.add_argument("records", type=_input, nargs="+",
+                            help="record netCDFs of 'slipwave slider-ingest' (role fit)")
+    slider_fit.add_argument("-o", "--output", type=Path, required=True,
+                            help="fit JSON to write (parameters, intervals)")
+    slider_fit.add_argument("--posterior", type=Path, required=True,
+                            help="posterior netCDF to write (samples, guesses)")
+    for key in default.SLIDER_TUNABLES:
+        if key != "draws":
+            slider_fit.add_argument(
+                f"--{key}", type=_setting("sliders", key), default=default.SLIDER_DEFAULTS[key],
+                help=default.setting_schema("sliders", key)["description"].replace("%", "%%")
+                + " (%(default)s)")
+    slider_fit.add_argument("--processes", type=_positive_int, default=1,
+                            help="worker processes for the guesses (%(default)s)")
+    slider_fit.set_defaults(run=_slider_fit)
+
+    slider_predict = commands.add_parser(
+        "slider-predict", help="a spring-slider record's posterior predictive",
+        description="Simulate the record's bench under posterior samples of the fit and say, "
+        "feature by feature, whether the record lies in the predictive's 95 %% interval, and "
+        "which regime is predicted and measured.")
+    slider_predict.add_argument("record", type=_input, help="record netCDF")
+    slider_predict.add_argument("--posterior", type=_input, required=True,
+                                help="posterior netCDF of 'slipwave slider-fit'")
+    slider_predict.add_argument("-o", "--output", type=Path, required=True,
+                                help="prediction JSON to write")
+    slider_predict.add_argument("--draws", type=_setting("sliders", "draws"),
+                                default=default.SLIDER_DEFAULTS["draws"],
+                                help="posterior samples simulated (%(default)s)")
+    slider_predict.add_argument("--members", type=_setting("sliders", "members"),
+                                default=default.SLIDER_DEFAULTS["members"],
+                                help="windows simulated per sample (%(default)s)")
+    slider_predict.add_argument("--seed", type=_setting("sliders", "seed"),
+                                default=default.SLIDER_DEFAULTS["seed"],
+                                help="the draws' seed (%(default)s)")
+    slider_predict.set_defaults(run=_slider_predict)
+
+    slider_report = commands.add_parser(
+        "slider-report", help="the spring-slider campaign's page: fit and predictions",
+        description="Write the campaign's HTML page: the fitted law beside published values, "
+        "and record by record the measured against the predicted regime, drop and recurrence.")
+    slider_report.add_argument("--fit", type=_input, required=True, help="fit JSON")
+    slider_report.add_argument("predictions", type=_input, nargs="+", help="prediction JSONs")
+    slider_report.add_argument("-o", "--output", type=Path, required=True, help="HTML to write")
+    slider_report.set_defaults(run=_slider_report)
     return parser
 
 

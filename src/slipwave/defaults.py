@@ -139,3 +139,11 @@ LOAD_CALIBRATION: float = _setting("fit", "load_calibration")
 """Relative calibration uncertainty of each load cell (T and N), one standard deviation."""
 SAMPLE_RATE_HZ = 100.0
 """Sampling rate of a simulated test's recording, Hz (the virtual bench's card)."""
+
+# Spring-slider campaigns (slipwave.fit.slider; config section ``sliders``).
+SLIDER_TUNABLES: tuple[str, ...] = ("members", "design", "acquisitions", "exploration",
+                                    "samples", "draws", "seed")
+"""The spring-slider fit's settings, each an option of ``slipwave slider-fit`` (``draws``:
+of ``slipwave slider-predict``) of its name."""
+SLIDER_DEFAULTS: dict[str, Any] = {key: _setting("sliders", key) for key in SLIDER_TUNABLES}
+"""Their defaults."""

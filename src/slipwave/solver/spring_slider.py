@@ -65,6 +65,9 @@ SHORTFALL_TOLERANCE = 1e-12
 INTEGRATORS = ("LSODA", "Radau")
 """scipy's methods, in the order tried on each stretch of the integration."""
 
+MAX_STALLED_SWITCHES = 8
+"""Switches between the massless and the inertial slider allowed at one instant."""
+
 INERTIA_SPEED_FRACTION = 1e-3
 """Below this fraction of the drive's speed the slider's inertia is left out (M = 0): its
 relaxation time M v / (N a) is then under a microsecond at the Colas bench's slowest
@@ -232,16 +235,27 @@ def simulate_spring_slider(
     for number, (begin, end, drive_speed) in enumerate(pieces):
         last = number == len(pieces) - 1
         inside = times[(times >= begin) & ((times <= end) if last else (times < end))]
-        start, stretch = begin, inside
+        start, stretch, stalled = begin, inside, 0
         while True:
-            state, inertial, start, rows, method = _integrate(
+            state, inertial, reached, rows, method = _integrate(
                 bench, law, drive_speed, state, inertial, start, end, stretch)
+            stalled = stalled + 1 if reached <= start else 0
+            if stalled > MAX_STALLED_SWITCHES:
+                raise SlipwaveError(
+                    f"the slider's speed keeps crossing {_slow(law, drive_speed):.3g} m/s at "
+                    f"t = {start:.6g} s without the integration moving on")
+            start = reached
             used.add(method)
             columns.append(rows)
             stretch = stretch[rows.shape[1]:]
             if start >= end:
                 break
-    ds = _to_dataset(bench, law, times, np.concatenate(columns, axis=1), pieces)
+    values = np.concatenate(columns, axis=1)
+    bad = np.flatnonzero(~np.all(np.isfinite(values), axis=0))
+    if bad.size:
+        raise SlipwaveError(f"the spring-slider's integration gave a non-finite state at "
+                            f"t = {times[bad[0]]:.6g} s")
+    ds = _to_dataset(bench, law, times, values, pieces)
     ds.attrs["integrators"] = " ".join(sorted(used))
     return ds
 
@@ -267,42 +281,64 @@ def _integrate(bench: SpringSlider, law: RateState, drive_speed: float, state: n
         tolerance = [ABSOLUTE_TOLERANCE, SHORTFALL_TOLERANCE, ABSOLUTE_TOLERANCE]
 
         def crossing(_: float, y: np.ndarray) -> float:
-            return float(slip_rate(law, y[0] - y[1], y[2])) - slow
+            return _log_speed_above(law, y[0] - y[1], y[2], slow)
     else:
         rhs, jacobian = _quasi_static(bench, law, drive_speed)
         start, tolerance = state, [ABSOLUTE_TOLERANCE, ABSOLUTE_TOLERANCE]
 
         def crossing(_: float, y: np.ndarray) -> float:
-            return float(slip_rate(law, y[0], y[1])) - slow
+            return _log_speed_above(law, y[0], y[1], slow)
     crossing.terminal = True  # type: ignore[attr-defined]
     # with inertia, a slider slowing down leaves it; without, one speeding up takes it
     crossing.direction = -1.0 if inertial else 1.0  # type: ignore[attr-defined]
     events = crossing if bench.mass > 0 else None
     evaluated = np.append(samples, end) if samples.size == 0 or samples[-1] < end else samples
+    failures = []
     for method in INTEGRATORS:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # LSODA's complaints: its status says it all
-            solution = solve_ivp(rhs, (begin, end), start, method=method, jac=jacobian,
-                                 t_eval=evaluated, events=events, rtol=RELATIVE_TOLERANCE,
-                                 atol=tolerance)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # LSODA's complaints: its status says it all
+                solution = solve_ivp(rhs, (begin, end), start, method=method, jac=jacobian,
+                                     t_eval=evaluated, events=events,
+                                     rtol=RELATIVE_TOLERANCE, atol=tolerance)
+        except ValueError as error:  # the event's root lost between a step's two ends
+            failures.append(f"{method}: {error}")
+            continue
         if solution.status >= 0:
             break
+        reached = solution.t[-1] if len(solution.t) else begin
+        failures.append(f"{method} at t = {reached:.6g} s: {solution.message}")
     else:
-        raise SlipwaveError(
-            f"the spring-slider's integration failed at t = {solution.t[-1]:.6g} s of "
-            f"[{begin:.6g}, {end:.6g}] s: {solution.message}")
-    rows = solution.y[:, :min(samples.size, solution.t.size)]
+        raise SlipwaveError(f"the spring-slider's integration over [{begin:.6g}, {end:.6g}] s "
+                            f"failed: {'; '.join(failures)}")
+    # an event before the first sample leaves solve_ivp's t and y as empty lists
+    passed = np.asarray(solution.t, dtype=float)
+    values = np.asarray(solution.y, dtype=float).reshape(start.size, passed.size)
+    rows = values[:, :min(samples.size, passed.size)]
     if solution.status == 1:  # the slider crossed the slow speed
         stop, last = float(solution.t_events[0][0]), solution.y_events[0][0]
-        rows = rows[:, solution.t[:rows.shape[1]] <= stop]
+        rows = rows[:, passed[:rows.shape[1]] <= stop]
     else:
-        stop, last = end, solution.y[:, -1]
+        stop, last = end, values[:, -1]
     if not inertial:
         rows = np.vstack([rows[0], np.zeros(rows.shape[1]), rows[1]])
     # the state carried on: the spring's force and the state; a slider that slows below
     # the slow speed gives up its (picosecond-scale) inertial shortfall
     carried = np.array([last[0], last[-1]])
     return carried, (not inertial) if solution.status == 1 else inertial, stop, rows, method
+
+
+def _log_speed_above(law: RateState, mu: float, log_state: float, bound: float) -> float:
+    """ln(v / bound) for the speed at which the law carries mu (-700 at rest or backwards).
+
+    In logarithms the event is linear in the state between a step's ends, so that its
+    root-finder sees the sign change the step saw.
+    """
+    if mu <= 0.0:
+        return -700.0
+    psi = law.mu0 + law.b * (math.log(law.v0 / law.dc) + log_state)
+    return (math.log(law.v0 / bound) + (mu - psi) / law.a
+            + math.log(-math.expm1(-2.0 * mu / law.a)))
 
 
 def _drive_pieces(drive_speed: float, speed_steps: Sequence[tuple[float, float]],

@@ -1,0 +1,155 @@
+"""What a spring-slider record says: its slips' drops and recurrence, its creep, its regime.
+
+A spring-slider's force over the normal load f rises at K V / N while the slider
+is stuck and falls when it slips. The record is low-passed at a multiple of the
+bench's natural frequency (a zero-phase Butterworth filter: the sensor's white
+noise goes, the slips and the inertial oscillations stay), its drops are found
+by :func:`slipwave.events.load_drops` with a fixed smallest drop, and each window
+of it is summarised by:
+
+- ``level``: the median of f;
+- ``drop``: the median drop of f in a slip;
+- ``recurrence``: the median time between slips' onsets, s;
+- ``stuck_share``: the drops' sum over the loading K V / N would have given over the
+  window: the share of the drive's travel the spring took up while the slider was
+  stuck (1 in a saw-tooth, 0 in steady sliding);
+- ``creep``: the median, over the slips, of the rise rate in the last fifth of the
+  rise before the slip over K V / N (1 without creep; below 1 where the slider
+  creeps before it slips).
+
+The regime follows the stuck share (:data:`REGIMES`): "stick-slip" when the slider
+is stuck most of the time, "sliding" when it seldom is, "mixed" between.
+
+>>> t = np.arange(0, 10, 1 / 2000)
+>>> f = 0.3 + 0.05 * ((t * 0.5) % 1.0)  # a saw-tooth: rises 0.05 in 2 s, drops at once
+>>> window = slider_window_features(t, f, stiffness=1000.0, drive_speed=7.5e-6,
+...                                 normal_load=0.3, mass=0.03)
+>>> round(window["drop"], 3), round(window["recurrence"], 2), round(window["stuck_share"], 2)
+(0.054, 2.0, 0.87)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import butter, sosfiltfilt
+
+from slipwave.events.steps import load_drops
+
+LOWPASS_NATURAL_MULTIPLE = 3.0
+"""The low-pass filter's corner, in multiples of the bench's natural frequency
+sqrt(K / M) / (2 pi): the inertial oscillations (at the natural frequency) stay."""
+
+LOWPASS_ORDER = 4
+"""The Butterworth filter's order (applied forwards and backwards)."""
+
+MIN_DROP = 0.02
+"""The smallest drop of f counted as a slip: the same on a record and on a simulation, so
+that small slips the noise hides on one are not counted on the other."""
+
+CREEP_PART = 0.2
+"""The last part of each rise over which the creep's rise rate is measured."""
+
+REGIMES = {"stick-slip": 2 / 3, "mixed": 1 / 3, "sliding": 0.0}
+"""Each regime and the smallest stuck share it takes, in order."""
+
+FEATURES = ("level", "drop", "recurrence", "stuck_share", "creep")
+"""The features of a window, in order."""
+
+
+def lowpass(ratio: np.ndarray, sample_rate: float, *, stiffness: float, mass: float
+            ) -> np.ndarray:
+    """The record low-passed below :data:`LOWPASS_NATURAL_MULTIPLE` natural frequencies.
+
+    Parameters
+    ----------
+    ratio
+        The spring's force over the normal load, sampled at a constant rate.
+    sample_rate
+        Samples per second.
+    stiffness
+        The spring's stiffness, N/m.
+    mass
+        The slider's mass, kg.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered record (the input when the corner lies above the Nyquist frequency).
+    """
+    corner = LOWPASS_NATURAL_MULTIPLE * np.sqrt(stiffness / mass) / (2 * np.pi)
+    if corner >= 0.5 * sample_rate:
+        return np.asarray(ratio, dtype=float)
+    sections = butter(LOWPASS_ORDER, corner, fs=sample_rate, output="sos")
+    return np.asarray(sosfiltfilt(sections, ratio))
+
+
+def regime_of(stuck_share: float) -> str:
+    """The regime a stuck share falls in (:data:`REGIMES`).
+
+    Parameters
+    ----------
+    stuck_share
+        The share of the drive's travel taken up while stuck.
+
+    Returns
+    -------
+    str
+        ``"stick-slip"``, ``"mixed"`` or ``"sliding"``.
+    """
+    return next(name for name, low in REGIMES.items() if stuck_share >= low)
+
+
+def slider_window_features(time: np.ndarray, ratio: np.ndarray, *, stiffness: float,
+                           drive_speed: float, normal_load: float, mass: float
+                           ) -> dict[str, float]:
+    """The features of one window of a spring-slider record (the module's list).
+
+    Parameters
+    ----------
+    time
+        Sample times, s (a constant step).
+    ratio
+        The spring's force over the normal load.
+    stiffness
+        The spring's stiffness K, N/m.
+    drive_speed
+        The drive's speed V, m/s.
+    normal_load
+        The normal load N, newtons.
+    mass
+        The slider's mass M, kg.
+
+    Returns
+    -------
+    dict
+        :data:`FEATURES`. With fewer than two slips, ``recurrence`` is the window's
+        length (no slip recurred within it) and ``drop`` and ``creep`` are those of the
+        slips there are (``drop`` 0 and ``creep`` 1 with none).
+    """
+    time = np.asarray(time, dtype=float)
+    smooth = lowpass(ratio, 1.0 / float(time[1] - time[0]), stiffness=stiffness, mass=mass)
+    drops = load_drops(time, smooth, min_drop=MIN_DROP)
+    span = float(time[-1] - time[0])
+    loading = stiffness * drive_speed / normal_load
+    onsets = drops["t_start"].to_numpy()
+    creeps = _creep_rates(time, smooth, drops["i_start"].to_numpy(),
+                          drops["i_end"].to_numpy()) / loading
+    return {
+        "level": float(np.median(smooth)),
+        "drop": float(drops["drop"].median()) if len(drops) else 0.0,
+        "recurrence": float(np.median(np.diff(onsets))) if len(onsets) > 1 else span,
+        "stuck_share": float(drops["drop"].sum() / (loading * span)),
+        "creep": float(np.median(creeps)) if creeps.size else 1.0,
+    }
+
+
+def _creep_rates(time: np.ndarray, smooth: np.ndarray, starts: np.ndarray,
+                 ends: np.ndarray) -> np.ndarray:
+    """The rise rate over the last :data:`CREEP_PART` of each rise between two slips."""
+    rates = []
+    for before_end, start in zip(ends[:-1], starts[1:], strict=True):
+        first = start - max(int(CREEP_PART * (start - before_end)), 2)
+        if first <= before_end:
+            continue
+        rates.append(np.polyfit(time[first:start + 1], smooth[first:start + 1], 1)[0])
+    return np.asarray(rates)

@@ -1,0 +1,594 @@
+"""Rate-and-state friction fitted to spring-slider records: a synthetic likelihood over windows.
+
+A record is cut into windows of a few slips each and every window is summarised by
+:func:`slipwave.events.stick_slip.slider_window_features`; the record's statistic is
+the mean of its n windows' features. At a guess of the law (a, b - a, log10 Dc,
+mu0), the bench is simulated (:func:`slipwave.solver.spring_slider.simulate_spring_slider`)
+for a spin-up window and K more, the record's white noise added to each (common
+random numbers: the same draws at every guess), and the K windows' features give the
+mean and covariance of one window's statistic. The record's statistic then has the
+Gaussian synthetic log-likelihood (Wood 2010) log N(observed; mean,
+Sigma (1/n + 1/K) + diag(s^2 / n + floor^2)), s the record's own windows' standard
+deviations (the observed mean's standard error, measured: a deterministic law's windows
+can vary far less than a record's), Sigma shrunk as the slab's ensembles' are
+(:func:`slipwave.fit.likelihood.shrunk_covariance`); records add. The posterior is
+the slab's search machinery (:mod:`slipwave.fit.search`): a Gaussian-process
+surrogate of the log-likelihood over a Latin hypercube and points added where its
+upper confidence bound is highest, then emcee on prior x exp(surrogate).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import xarray as xr
+from scipy.stats import multivariate_normal, qmc
+
+from slipwave.defaults import SLIDER_DEFAULTS
+from slipwave.errors import SlipwaveError
+from slipwave.events.steps import noise_level
+from slipwave.events.stick_slip import FEATURES, regime_of, slider_window_features
+from slipwave.fit.likelihood import shrunk_covariance
+from slipwave.fit.search import sample_posterior, surrogate
+from slipwave.solver.rate_state import RateState, steady_friction
+from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
+
+PARAMETERS = ("a", "b_minus_a", "log10_dc", "mu0")
+"""The search's coordinates: a, b - a, log10 of Dc in metres, mu0 (at v0 = 1 um/s)."""
+
+PRIOR_BOX = np.array([[0.002, 0.05], [-0.01, 0.03], [-7.0, -4.5], [0.15, 0.6]])
+"""The uniform prior's bounds, one row per parameter. a: the direct effect is positive in
+every measurement, 0.002-0.05 from rocks to paper and polymers; b - a: velocity
+strengthening (negative) to strongly weakening; Dc: 0.1 to 30 um, the size of the
+contacts between asperities or paper fibres; mu0: paper on paper's friction, 0.15 to 0.6
+(the Colas records' median levels lie at 0.29-0.51)."""
+
+REFERENCE_SCATTER = 0.08
+"""The scatter of the reference friction from one record to the next (standard deviation
+of F/N): the Colas records' median levels differ by more than any law's speed dependence
+explains (0.51 at 168 N/m and 4300 um/s, 0.29 at 1002 N/m and the same speed), as the
+state of a paper surface changes from run to run; 0.08 is the standard deviation of the
+six fitted records' median levels (0.081), the held-out records not read. The law's
+dynamics do not depend on mu0, so this widens mu0's interval and nothing else."""
+
+FEATURE_FLOOR = np.array([REFERENCE_SCATTER, 0.002, 0.02, 0.01, 0.02])
+"""The smallest standard error of each feature's statistic (:data:`FEATURES`; the
+recurrence's in its logarithm): the level's is the records' scatter
+(:data:`REFERENCE_SCATTER`), the others' what a feature that does not vary over the
+windows still carries of the model's own roughness."""
+
+SPIN_UP_WINDOWS = 1
+"""Windows simulated and dropped before the members: the start's transient."""
+
+
+@dataclass(frozen=True)
+class SliderRecord:
+    """A spring-slider record and its bench, as the fit reads it.
+
+    Attributes
+    ----------
+    name
+        The record's name.
+    stiffness, drive_speed, mass, normal_load
+        The bench (N/m, m/s, kg, N).
+    window
+        The windows' length, s.
+    observed
+        The mean of the record's windows' features (:data:`FEATURES`, the recurrence
+        in its logarithm).
+    windows
+        The number of windows n.
+    spread
+        The standard deviations of the record's windows' features.
+    noise
+        The record's white-noise standard deviation (added to the simulations).
+    regime
+        The record's regime (from its whole length).
+
+    """
+
+    name: str
+    stiffness: float
+    drive_speed: float
+    mass: float
+    normal_load: float
+    window: float
+    observed: tuple[float, ...]
+    windows: int
+    spread: tuple[float, ...]
+    noise: float
+    regime: str
+
+    @property
+    def bench(self) -> SpringSlider:
+        """The record's bench.
+
+        Returns
+        -------
+        SpringSlider
+            Its mass, stiffness, drive speed and normal load.
+        """
+        return SpringSlider(mass=self.mass, stiffness=self.stiffness,
+                            drive_speed=self.drive_speed, normal_load=self.normal_load)
+
+
+def _vector(features: Mapping[str, float]) -> np.ndarray:
+    """The features as the likelihood's vector (the recurrence in its logarithm)."""
+    values = np.array([features[name] for name in FEATURES])
+    values[FEATURES.index("recurrence")] = np.log(values[FEATURES.index("recurrence")])
+    return values
+
+
+def window_vectors(time: np.ndarray, ratio: np.ndarray, bench: SpringSlider,
+                   window: float) -> np.ndarray:
+    """The feature vectors of a record's consecutive windows.
+
+    Parameters
+    ----------
+    time, ratio
+        The record.
+    bench
+        Its spring-slider.
+    window
+        The windows' length, s (a shorter end is left out).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (windows, features).
+    """
+    step = float(time[1] - time[0])
+    size = round(window / step)
+    count = time.size // size
+    if count < 1:
+        raise SlipwaveError(f"a record of {time[-1] - time[0]:.3g} s holds no window of "
+                            f"{window:.3g} s")
+    return np.array([_vector(slider_window_features(
+        time[i * size:(i + 1) * size], ratio[i * size:(i + 1) * size],
+        stiffness=bench.stiffness, drive_speed=bench.drive_speed,
+        normal_load=bench.normal_load, mass=bench.mass)) for i in range(count)])
+
+
+def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_speed: float,
+                  mass: float, normal_load: float, window: float) -> SliderRecord:
+    """A record read for the fit: its windows' mean features, its noise and regime.
+
+    Parameters
+    ----------
+    name
+        The record's name.
+    record
+        ``friction_ratio`` over ``time`` (:func:`slipwave.io.slider_record.read_slider_record`).
+    stiffness, drive_speed, mass, normal_load
+        The bench (N/m, m/s, kg, N).
+    window
+        The windows' length, s.
+
+    Returns
+    -------
+    SliderRecord
+        The record as the fit reads it.
+    """
+    bench = SpringSlider(mass=mass, stiffness=stiffness, drive_speed=drive_speed,
+                         normal_load=normal_load)
+    time, ratio = record.time.values, record.friction_ratio.values
+    vectors = window_vectors(time, ratio, bench, window)
+    whole = slider_window_features(time, ratio, stiffness=stiffness, drive_speed=drive_speed,
+                                   normal_load=normal_load, mass=mass)
+    return SliderRecord(name, stiffness, drive_speed, mass, normal_load, window,
+                        tuple(vectors.mean(axis=0)), vectors.shape[0],
+                        tuple(vectors.std(axis=0, ddof=1) if len(vectors) > 1
+                              else np.zeros(vectors.shape[1])),
+                        noise_level(ratio), regime_of(whole["stuck_share"]))
+
+
+def law_at(point: np.ndarray) -> RateState:
+    """The law at a point of the search's coordinates (:data:`PARAMETERS`).
+
+    Parameters
+    ----------
+    point
+        (a, b - a, log10 Dc, mu0).
+
+    Returns
+    -------
+    RateState
+        The aging law there (v0 1 um/s).
+    """
+    a, excess, log_dc, mu0 = (float(value) for value in point)
+    return RateState(a=a, b=a + excess, dc=10.0**log_dc, mu0=mu0)
+
+
+def simulated_windows(record: SliderRecord, law: RateState, members: int, seed: int
+                      ) -> np.ndarray:
+    """The features of ``members`` simulated windows of a record's bench under a law.
+
+    Parameters
+    ----------
+    record
+        The record (its bench, window and noise).
+    law
+        The friction law.
+    members
+        Windows kept after :data:`SPIN_UP_WINDOWS`.
+    seed
+        The noise's seed.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (members, features); NaN rows where the integration failed.
+    """
+    rate = 2000.0
+    duration = (SPIN_UP_WINDOWS + members) * record.window
+    start = float(steady_friction(law, record.drive_speed)) - 1e-3
+    try:
+        simulation = simulate_spring_slider(record.bench, law, duration=duration,
+                                            sample_rate=rate, initial_ratio=start)
+    except SlipwaveError:
+        return np.full((members, len(FEATURES)), np.nan)
+    time = simulation.time.values
+    ratio = simulation.friction_ratio.values
+    ratio = ratio + np.random.default_rng(seed).normal(0.0, record.noise, ratio.size)
+    size = round(record.window * rate)
+    kept = slice(SPIN_UP_WINDOWS * size, (SPIN_UP_WINDOWS + members) * size)
+    return window_vectors(time[kept], ratio[kept], record.bench, record.window)[:members]
+
+
+def record_loglik(record: SliderRecord, members: np.ndarray) -> float:
+    """The record's synthetic log-likelihood given its simulated windows.
+
+    Parameters
+    ----------
+    record
+        The record (its observed mean and number of windows).
+    members
+        Shape (K, features), from :func:`simulated_windows`.
+
+    Returns
+    -------
+    float
+        log N(observed; mean, Sigma (1/n + 1/K) + diag(s^2 / n + floor^2)); -inf with fewer
+        than two finite members.
+    """
+    finite = members[np.all(np.isfinite(members), axis=1)]
+    if finite.shape[0] < 2:
+        return float("-inf")
+    covariance = shrunk_covariance(finite) * (1.0 / record.windows + 1.0 / finite.shape[0])
+    covariance += np.diag(np.asarray(record.spread) ** 2 / record.windows + FEATURE_FLOOR**2)
+    return float(multivariate_normal.logpdf(np.asarray(record.observed),
+                                            mean=finite.mean(axis=0), cov=covariance))
+
+
+@dataclass(frozen=True)
+class SliderFitSettings:
+    """How the spring-slider fit searches.
+
+    Attributes
+    ----------
+    members
+        Simulated windows per record and guess (K).
+    design
+        Points of the first Latin hypercube, per parameter.
+    acquisitions
+        Points added where the surrogate's upper confidence bound is highest, per
+        parameter.
+    exploration
+        The upper bound's multiple of the surrogate's standard deviation.
+    samples
+        Posterior samples kept.
+    processes
+        Worker processes for the guesses' simulations.
+    seed
+        The fit's seed.
+
+    """
+
+    members: int = SLIDER_DEFAULTS["members"]
+    design: int = SLIDER_DEFAULTS["design"]
+    acquisitions: int = SLIDER_DEFAULTS["acquisitions"]
+    exploration: float = SLIDER_DEFAULTS["exploration"]
+    samples: int = SLIDER_DEFAULTS["samples"]
+    processes: int = 1
+    seed: int = SLIDER_DEFAULTS["seed"]
+
+
+def loglik(records: Sequence[SliderRecord], point: np.ndarray, members: int,
+           seed: int) -> float:
+    """The records' summed synthetic log-likelihood at a point.
+
+    Parameters
+    ----------
+    records
+        The records fitted together.
+    point
+        The search's coordinates (:data:`PARAMETERS`).
+    members
+        Simulated windows per record.
+    seed
+        The noise's seed (the same at every point).
+
+    Returns
+    -------
+    float
+        The sum over the records of :func:`record_loglik`.
+    """
+    law = law_at(point)
+    return float(sum(record_loglik(record, simulated_windows(record, law, members, seed + i))
+                     for i, record in enumerate(records)))
+
+
+def _evaluate(records: Sequence[SliderRecord], points: np.ndarray, settings: SliderFitSettings
+              ) -> np.ndarray:
+    """Log-likelihoods at points, on the settings' processes."""
+    jobs = [(records, point, settings.members, settings.seed) for point in points]
+    if settings.processes <= 1:
+        return np.array([loglik(*job) for job in jobs])
+    with ProcessPoolExecutor(settings.processes) as pool:
+        return np.array(list(pool.map(_loglik_job, jobs)))
+
+
+def _loglik_job(job: tuple[Sequence[SliderRecord], np.ndarray, int, int]) -> float:
+    """:func:`loglik` of one job (a picklable call for the process pool)."""
+    return loglik(*job)
+
+
+def _inside(points: np.ndarray) -> np.ndarray:
+    """Whether points lie in the prior: its box, and b = a + (b - a) >= 0."""
+    points = np.atleast_2d(points)
+    return (np.all((points >= PRIOR_BOX[:, 0]) & (points <= PRIOR_BOX[:, 1]), axis=1)
+            & (points[:, 0] + points[:, 1] >= 0.0))
+
+
+def _prior_draws(count: int, rng: np.random.Generator | int) -> np.ndarray:
+    """``count`` Latin hypercube points of the box that lie in the prior (of 4 count drawn)."""
+    sampler = qmc.LatinHypercube(d=PRIOR_BOX.shape[0], seed=rng)
+    points = qmc.scale(sampler.random(4 * count), PRIOR_BOX[:, 0], PRIOR_BOX[:, 1])
+    return points[_inside(points)][:count]
+
+
+@dataclass(frozen=True)
+class SliderPosterior:
+    """A spring-slider fit's result.
+
+    Attributes
+    ----------
+    samples
+        Posterior samples, the search's coordinates (:data:`PARAMETERS`).
+    points, logliks
+        The guesses evaluated and their summed synthetic log-likelihoods.
+    records
+        The names of the records fitted.
+
+    """
+
+    samples: np.ndarray
+    points: np.ndarray
+    logliks: np.ndarray
+    records: tuple[str, ...]
+
+    def interval(self, probability: float = 0.95) -> dict[str, tuple[float, float, float]]:
+        """Each parameter's median and central interval (b and Dc in their own units).
+
+        Parameters
+        ----------
+        probability
+            The interval's probability.
+
+        Returns
+        -------
+        dict
+            ``a``, ``b``, ``dc`` (m), ``mu0``, ``b_minus_a``: (median, low, high).
+        """
+        tail = 50.0 * (1.0 - probability)
+        values = {"a": self.samples[:, 0], "b": self.samples[:, 0] + self.samples[:, 1],
+                  "b_minus_a": self.samples[:, 1], "dc": 10.0 ** self.samples[:, 2],
+                  "mu0": self.samples[:, 3]}
+        out = {}
+        for name, v in values.items():
+            middle, low, high = np.percentile(v, [50.0, tail, 100.0 - tail])
+            out[name] = (float(middle), float(low), float(high))
+        return out
+
+
+def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
+                progress: Callable[[str], None] | None = None) -> SliderPosterior:
+    """The posterior of (a, b - a, log10 Dc, mu0) given records fitted jointly.
+
+    Parameters
+    ----------
+    records
+        The records.
+    settings
+        The search's settings.
+    progress
+        Called with a line after each round of guesses.
+
+    Returns
+    -------
+    SliderPosterior
+        The posterior samples and the guesses.
+    """
+    dimensions = PRIOR_BOX.shape[0]
+    points = _prior_draws(settings.design * dimensions, settings.seed)
+    logliks = _evaluate(records, points, settings)
+    say = progress or (lambda _: None)
+    say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
+    rng = np.random.default_rng(settings.seed)
+    batch = max(settings.processes, 1)
+    for round_ in range(0, settings.acquisitions * dimensions, batch):
+        finite = np.isfinite(logliks)
+        process = surrogate(points[finite], logliks[finite], PRIOR_BOX, settings.seed + round_)
+        candidates = _prior_draws(4000, rng)
+        chosen = candidates[np.argsort(process.upper(candidates, settings.exploration))[-batch:]]
+        points = np.vstack([points, chosen])
+        logliks = np.append(logliks, _evaluate(records, chosen, settings))
+        say(f"acquisitions: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
+    finite = np.isfinite(logliks)
+    process = surrogate(points[finite], logliks[finite], PRIOR_BOX, settings.seed)
+    best = points[finite][np.argsort(logliks[finite])[-4:]]
+    samples = sample_posterior(process, PRIOR_BOX, _inside, best, samples=settings.samples,
+                               seed=settings.seed)
+    return SliderPosterior(samples, points, logliks, tuple(r.name for r in records))
+
+
+def predict_record(record: SliderRecord, posterior: SliderPosterior, draws: int,
+                   members: int, seed: int) -> dict[str, object]:
+    """The posterior predictive of a record the fit did not see.
+
+    Parameters
+    ----------
+    record
+        The record (its bench; its observed features are only compared, never used).
+    posterior
+        The fit.
+    draws
+        Posterior samples simulated.
+    members
+        Windows simulated per sample.
+    seed
+        The draws' and the noise's seed.
+
+    Returns
+    -------
+    dict
+        For ``drop`` and ``recurrence`` (s) and ``stuck_share``: the predictive's median
+        and 95 % interval of one window's median, and the measured value; the predicted
+        regime (the most frequent over the draws' windows) and the measured one.
+    """
+    rng = np.random.default_rng(seed)
+    picks = posterior.samples[rng.choice(len(posterior.samples), draws, replace=False)]
+    windows = np.vstack([simulated_windows(record, law_at(point), members, seed + i)
+                         for i, point in enumerate(picks)])
+    windows = windows[np.all(np.isfinite(windows), axis=1)]
+    recurrence = FEATURES.index("recurrence")
+    windows[:, recurrence] = np.exp(windows[:, recurrence])
+    observed = np.asarray(record.observed, dtype=float).copy()
+    observed[recurrence] = np.exp(observed[recurrence])
+    out: dict[str, object] = {"record": record.name}
+    for name in ("drop", "recurrence", "stuck_share"):
+        column = windows[:, FEATURES.index(name)]
+        low, middle, high = np.percentile(column, [2.5, 50.0, 97.5])
+        measured = float(observed[FEATURES.index(name)])
+        out[name] = {"predicted": float(middle), "low": float(low), "high": float(high),
+                     "measured": measured, "inside": bool(low <= measured <= high)}
+    regimes = [regime_of(share) for share in windows[:, FEATURES.index("stuck_share")]]
+    names, counts = np.unique(regimes, return_counts=True)
+    out["regime"] = {"predicted": str(names[np.argmax(counts)]), "measured": record.regime,
+                     "shares": {str(n): int(c) / len(regimes) for n, c in
+                                zip(names, counts, strict=True)}}
+    return out
+
+
+def posterior_json(posterior: SliderPosterior, settings: SliderFitSettings,
+                   seconds: float) -> str:
+    """The fit's parameters, their intervals and its cost as JSON.
+
+    Parameters
+    ----------
+    posterior
+        The fit.
+    settings
+        Its settings.
+    seconds
+        The fit's wall time.
+
+    Returns
+    -------
+    str
+        Indented JSON.
+    """
+    return json.dumps({
+        "records": list(posterior.records),
+        "parameters": {name: dict(zip(("median", "low", "high"), values, strict=True))
+                       for name, values in posterior.interval().items()},
+        "guesses": len(posterior.points),
+        "best_loglik": float(np.max(posterior.logliks)),
+        "settings": asdict(settings),
+        "seconds": seconds,
+    }, indent=2)
+
+
+BENCH_ATTRIBUTES = ("record_id", "role", "stiffness_n_m", "drive_speed_m_s", "mass_kg",
+                    "normal_load_n", "window_s")
+"""The attributes a spring-slider record's netCDF carries (``slipwave slider-ingest``)."""
+
+
+def record_of(dataset: xr.Dataset) -> SliderRecord:
+    """The record as the fit reads it, from its netCDF (:data:`BENCH_ATTRIBUTES`).
+
+    Parameters
+    ----------
+    dataset
+        ``friction_ratio`` over ``time``, with the bench's attributes.
+
+    Returns
+    -------
+    SliderRecord
+        Its windows' features, noise and regime.
+    """
+    missing = [name for name in BENCH_ATTRIBUTES if name not in dataset.attrs]
+    if missing:
+        raise SlipwaveError(f"not a spring-slider record of 'slipwave slider-ingest': no "
+                            f"{', '.join(missing)}")
+    attrs = dataset.attrs
+    return slider_record(str(attrs["record_id"]), dataset,
+                         stiffness=float(attrs["stiffness_n_m"]),
+                         drive_speed=float(attrs["drive_speed_m_s"]),
+                         mass=float(attrs["mass_kg"]),
+                         normal_load=float(attrs["normal_load_n"]),
+                         window=float(attrs["window_s"]))
+
+
+def posterior_dataset(posterior: SliderPosterior, settings: SliderFitSettings,
+                      seconds: float) -> xr.Dataset:
+    """The posterior's samples and the guesses as a Dataset.
+
+    Parameters
+    ----------
+    posterior
+        The fit.
+    settings
+        Its settings (attributes).
+    seconds
+        The fit's wall time.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``samples`` (sample, parameter), ``guesses`` (guess, parameter) and ``loglik``
+        (guess).
+    """
+    return xr.Dataset(
+        {"samples": (("sample", "parameter"), posterior.samples,
+                     {"long_name": "posterior samples of the search's coordinates"}),
+         "guesses": (("guess", "parameter"), posterior.points,
+                     {"long_name": "the guesses evaluated"}),
+         "loglik": ("guess", posterior.logliks,
+                    {"long_name": "summed synthetic log-likelihood of the fitted records"})},
+        coords={"parameter": list(PARAMETERS)},
+        attrs={"title": "rate-and-state friction fitted to spring-slider records",
+               "records": " ".join(posterior.records), "seconds": seconds,
+               **{f"setting_{name}": value for name, value in asdict(settings).items()}},
+    )
+
+
+def posterior_of(dataset: xr.Dataset) -> SliderPosterior:
+    """The posterior back from :func:`posterior_dataset`'s Dataset.
+
+    Parameters
+    ----------
+    dataset
+        The fit's netCDF.
+
+    Returns
+    -------
+    SliderPosterior
+        Its samples, guesses and records.
+    """
+    return SliderPosterior(dataset["samples"].values, dataset["guesses"].values,
+                           dataset["loglik"].values, tuple(str(dataset.attrs["records"]).split()))

@@ -1,0 +1,82 @@
+"""The spring-slider fit's likelihood: it prefers the law that made a record."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from slipwave.errors import SlipwaveError
+from slipwave.events.stick_slip import FEATURES
+from slipwave.fit import slider
+from slipwave.solver.rate_state import RateState, steady_friction
+from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
+
+MASS, NORMAL_LOAD = 0.0307, 0.301
+TRUTH = np.array([0.01, 0.005, -6.0, 0.35])  # a, b - a, log10 Dc, mu0
+
+
+@pytest.fixture(scope="module")
+def record() -> slider.SliderRecord:
+    """Eight seconds of a virtual Colas bench at 1002 N/m and 1.1 mm/s, with sensor noise."""
+    law = slider.law_at(TRUTH)
+    bench = SpringSlider(mass=MASS, stiffness=1002.0, drive_speed=1.1e-3,
+                         normal_load=NORMAL_LOAD)
+    made = simulate_spring_slider(bench, law, duration=10.0, sample_rate=2000.0,
+                                  initial_ratio=float(steady_friction(law, 1.1e-3)) - 1e-3)
+    kept = made.sel(time=slice(2.0, None))
+    noisy = kept.friction_ratio.values + np.random.default_rng(7).normal(0, 0.003, kept.time.size)
+    ds = xr.Dataset({"friction_ratio": ("time", noisy)},
+                    coords={"time": kept.time.values - kept.time.values[0]})
+    return slider.slider_record("virtual", ds, stiffness=1002.0, drive_speed=1.1e-3,
+                                mass=MASS, normal_load=NORMAL_LOAD, window=1.0)
+
+
+def test_a_record_is_read_into_windows(record: slider.SliderRecord) -> None:
+    assert record.windows == 8
+    assert len(record.observed) == len(FEATURES)
+    assert record.noise == pytest.approx(0.003, rel=0.15)
+    assert record.regime in ("stick-slip", "mixed", "sliding")
+    law = slider.law_at(TRUTH)
+    assert (law.a, law.b, law.dc, law.mu0) == pytest.approx((0.01, 0.015, 1e-6, 0.35))
+
+
+def test_the_likelihood_prefers_the_law_that_made_the_record(
+        record: slider.SliderRecord) -> None:
+    at_truth = slider.loglik([record], TRUTH, members=4, seed=3)
+    for change in ([0.0, 0.0, 0.0, 0.05], [0.01, 0.0, 0.0, 0.0], [0.0, 0.0, 0.7, 0.0],
+                   [0.0, 0.005, 0.0, 0.0]):
+        assert slider.loglik([record], TRUTH + np.array(change), members=4, seed=3) < at_truth
+
+
+def test_the_prediction_of_a_record_says_what_it_measured(
+        record: slider.SliderRecord) -> None:
+    samples = TRUTH + np.random.default_rng(0).normal(0.0, 1e-4, (10, 4))
+    posterior = slider.SliderPosterior(samples, samples, np.zeros(10), ("virtual",))
+    predicted = slider.predict_record(record, posterior, draws=3, members=3, seed=1)
+    for name in ("drop", "recurrence", "stuck_share"):
+        entry = predicted[name]
+        assert entry["low"] <= entry["predicted"] <= entry["high"]  # type: ignore[index]
+        assert entry["inside"]  # type: ignore[index]
+    assert predicted["regime"]["predicted"] == record.regime  # type: ignore[index]
+    interval = posterior.interval()
+    assert interval["dc"][0] == pytest.approx(1e-6, rel=0.01)
+    assert interval["b"][0] == pytest.approx(0.015, abs=1e-3)
+
+
+def test_a_record_shorter_than_a_window_is_refused() -> None:
+    bench = SpringSlider(mass=MASS, stiffness=168.0, drive_speed=42e-6, normal_load=NORMAL_LOAD)
+    time = np.arange(0.0, 1.0, 1 / 2000)
+    with pytest.raises(SlipwaveError, match="no window of 10 s"):
+        slider.window_vectors(time, 0.3 + 0 * time, bench, 10.0)
+
+
+def test_a_law_the_integrator_cannot_follow_costs_nothing_but_its_likelihood(
+        record: slider.SliderRecord, monkeypatch: pytest.MonkeyPatch) -> None:
+    def failing(*args: object, **kwargs: object) -> None:
+        raise SlipwaveError("integration failed")
+    monkeypatch.setattr(slider, "simulate_spring_slider", failing)
+    members = slider.simulated_windows(record, RateState(a=0.01, b=0.02, dc=1e-6, mu0=0.4),
+                                       4, 0)
+    assert np.isnan(members).all()
+    assert slider.record_loglik(record, members) == float("-inf")
