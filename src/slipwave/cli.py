@@ -673,11 +673,13 @@ def _bench(args: argparse.Namespace) -> None:
 
 
 def _slider_ingest(args: argparse.Namespace) -> None:
+    from slipwave.identity import stamp
     from slipwave.io import write_dataset
     from slipwave.io.slider_record import read_slider_record
     from slipwave.slider_campaign import GRAVITY
 
     record = read_slider_record(args.mat)
+    stamp(record.attrs, "spring-slider record")
     mass = args.mass * 1e-3
     record.attrs.update({
         "record_id": args.record_id, "role": args.role, "stiffness_n_m": args.stiffness,
@@ -698,20 +700,26 @@ def _slider_fit(args: argparse.Namespace) -> None:
         posterior_json,
         record_of,
     )
+    from slipwave.identity import stamp
     from slipwave.io import atomic_output, read_dataset, write_dataset
 
     started = clock.perf_counter()
-    records = [record_of(read_dataset(path, "spring-slider record")) for path in args.records]
-    held_out = [record.name for record, path in zip(records, args.records, strict=True)
-                if read_dataset(path, "spring-slider record").attrs["role"] != "fit"]
-    if held_out:
-        raise SlipwaveError(f"records to predict given to the fit: {', '.join(held_out)}")
+    datasets = [read_dataset(path, "spring-slider record") for path in args.records]
+    held_out = [f"{path} ({dataset.attrs['role']})"
+                for path, dataset in zip(args.records, datasets, strict=True)
+                if dataset.attrs["role"] != "fit"]
+    if held_out:  # a held-out record is never read by the fit
+        raise SlipwaveError(f"records whose role is not fit given to the fit: "
+                            f"{', '.join(held_out)}")
+    records = [record_of(dataset) for dataset in datasets]
     settings = SliderFitSettings(members=args.members, design=args.design,
                                  acquisitions=args.acquisitions, exploration=args.exploration,
                                  samples=args.samples, processes=args.processes, seed=args.seed)
     posterior = fit_records(records, settings, progress=print)
     seconds = clock.perf_counter() - started
-    write_dataset(posterior_dataset(posterior, settings, seconds), args.posterior)
+    dataset = posterior_dataset(posterior, settings, seconds)
+    stamp(dataset.attrs, "spring-slider posterior")
+    write_dataset(dataset, args.posterior)
     with atomic_output(args.output) as temporary:
         temporary.write_text(posterior_json(posterior, settings, seconds), encoding="utf-8")
     for name, (middle, low, high) in posterior.interval().items():
@@ -734,8 +742,8 @@ def _slider_predict(args: argparse.Namespace) -> None:
     with atomic_output(args.output) as temporary:
         temporary.write_text(json.dumps(prediction, indent=2), encoding="utf-8")
     regime = prediction["regime"]
-    print(f"{record.name}: regime predicted {regime['predicted']}, measured "  # type: ignore[index]
-          f"{regime['measured']} -> {args.output}")  # type: ignore[index]
+    print(f"{record.name}: regime predicted {regime['predicted']}, measured "
+          f"{regime['measured']} -> {args.output}")
 
 
 def _slider_report(args: argparse.Namespace) -> None:

@@ -29,6 +29,8 @@ PRODUCTS = {
     "kymograph": "slipwave kymograph",
     "behaviour map": "slipwave map assemble",
     "map row": "slipwave map row",
+    "spring-slider record": "slipwave slider-ingest",
+    "spring-slider posterior": "slipwave slider-fit",
 }
 """The netCDF products, each with the command that writes it."""
 

@@ -23,6 +23,7 @@ import json
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -437,7 +438,7 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
 
 
 def predict_record(record: SliderRecord, posterior: SliderPosterior, draws: int,
-                   members: int, seed: int) -> dict[str, object]:
+                   members: int, seed: int) -> dict[str, Any]:
     """The posterior predictive of a record the fit did not see.
 
     Parameters
@@ -469,7 +470,7 @@ def predict_record(record: SliderRecord, posterior: SliderPosterior, draws: int,
     windows[:, recurrence] = np.exp(windows[:, recurrence])
     observed = np.asarray(record.observed, dtype=float).copy()
     observed[recurrence] = np.exp(observed[recurrence])
-    out: dict[str, object] = {"record": record.name}
+    out: dict[str, Any] = {"record": record.name}
     for name in ("drop", "recurrence", "stuck_share"):
         column = windows[:, FEATURES.index(name)]
         low, middle, high = np.percentile(column, [2.5, 50.0, 97.5])
