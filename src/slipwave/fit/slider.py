@@ -62,6 +62,10 @@ recurrence's in its logarithm): the level's is the records' scatter
 (:data:`REFERENCE_SCATTER`), the others' what a feature that does not vary over the
 windows still carries of the model's own roughness."""
 
+ACQUISITION_BATCH = 2
+"""Guesses added per refit of the surrogate (the highest upper bounds): the same whatever
+the number of processes, so that a fit does not depend on the cores it ran on."""
+
 SPIN_UP_WINDOWS = 1
 """Windows simulated and dropped before the members: the start's transient."""
 
@@ -420,7 +424,7 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
     say = progress or (lambda _: None)
     say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
     rng = np.random.default_rng(settings.seed)
-    batch = max(settings.processes, 1)
+    batch = ACQUISITION_BATCH
     for round_ in range(0, settings.acquisitions * dimensions, batch):
         finite = np.isfinite(logliks)
         process = surrogate(points[finite], logliks[finite], PRIOR_BOX, settings.seed + round_)
