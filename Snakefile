@@ -38,6 +38,22 @@ check_config_files(
     command_line=workflow.overwrite_configfiles,
 )
 validate(config, str(schema_path("config")))
+
+
+# A job killed outright (out of memory, SIGKILL) leaves its half-written output's
+# hidden .part file: removed when the workflow starts (no job of it runs then; the
+# working directory is Snakemake's lock) and, those of dead writers, when a job fails.
+onstart:
+    remove_stale_parts(["results", "reports"], nothing_runs=True)
+
+
+onerror:
+    remove_stale_parts(["results", "reports"])
+
+
+include: "workflow/rules/common.smk"
+
+
 if config["kind"] == "spring_slider":
     # a campaign of spring-slider records: the law fitted on those whose role is fit,
     # predicted on every record (the others are held out: the fit never reads them)
@@ -47,9 +63,6 @@ if config["kind"] == "spring_slider":
 
     wildcard_constraints:
         record_id="|".join(map(re.escape, SLIDER_IDS)),
-
-    def slider_bench_options(wildcards):
-        return ingest_options(SLIDERS.loc[wildcards.record_id])
 
     slider_fit_options = fit_options(config["sliders"])
 
@@ -79,7 +92,6 @@ else:
         config["map"]["elements"], config["map"]["band_elements"]
     )
 
-
     wildcard_constraints:
         test_id="|".join(map(re.escape, TEST_IDS)) or "no-tests",
         job=r"\d+",
@@ -87,18 +99,6 @@ else:
         elements=r"\d+",
 
 
-    # A job killed outright (out of memory, SIGKILL) leaves its half-written output's
-    # hidden .part file: removed when the workflow starts (no job of it runs then; the
-    # working directory is Snakemake's lock) and, those of dead writers, when a job fails.
-    onstart:
-        remove_stale_parts(["results", "reports"], nothing_runs=True)
-
-
-    onerror:
-        remove_stale_parts(["results", "reports"])
-
-
-    include: "workflow/rules/common.smk"
     include: "workflow/rules/compile.smk"
     include: "workflow/rules/ingest.smk"
     include: "workflow/rules/detect.smk"

@@ -31,6 +31,7 @@ RESERVED_TEST_IDS = {
     "logs": "results/logs/",
     "cache": "results/cache/",
     "solver.json": "results/solver.json",
+    "sliders": "results/sliders/ and reports/sliders.html (a spring-slider campaign)",
 }
 """Names of the campaign's own products beside the tests' (a test's files are
 ``results/<test_id>/`` and ``reports/<test_id>.html``): no test may take one."""

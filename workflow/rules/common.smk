@@ -8,6 +8,10 @@ def scaled_memory(megabytes):
     return lambda wildcards, attempt: megabytes * attempt
 
 
+def slider_bench_options(wildcards):
+    return ingest_options(SLIDERS.loc[wildcards.record_id])
+
+
 def test_row(wildcards):
     return campaign.loc[wildcards.test_id]
 
