@@ -11,7 +11,7 @@ from snakemake.utils import min_version, validate
 from slipwave.io.atomic import remove_stale_parts
 from slipwave.map import deal_rows, friction_grid, map_meshes, shard_count
 from slipwave.validation import load_schema, schema_path
-from slipwave.slider_campaign import fit_options, ingest_options, read_slider_campaign
+from slipwave.slider_campaign import read_slider_campaign, slider_fit_options, slider_ingest_options
 from slipwave.campaign import (
     cache_option,
     check_campaign,
@@ -63,8 +63,6 @@ if config["kind"] == "spring_slider":
 
     wildcard_constraints:
         record_id="|".join(map(re.escape, SLIDER_IDS)),
-
-    slider_fit_options = fit_options(config["sliders"])
 
     include: "workflow/rules/slider_ingest.smk"
     include: "workflow/rules/slider_fit.smk"

@@ -8,7 +8,11 @@ import pytest
 
 from slipwave.defaults import SLIDER_DEFAULTS
 from slipwave.errors import ConfigError
-from slipwave.slider_campaign import fit_options, ingest_options, read_slider_campaign
+from slipwave.slider_campaign import (
+    read_slider_campaign,
+    slider_fit_options,
+    slider_ingest_options,
+)
 
 HEADER = "record_id\tmat\trole\tstiffness_n_m\tdrive_speed_um_s\tmass_g\tnormal_load_n\twindow_s\n"
 
@@ -30,8 +34,9 @@ def test_the_colas_campaign_is_read() -> None:
 def test_a_given_normal_load_is_kept(tmp_path: Path) -> None:
     table = read_slider_campaign(_table(tmp_path, "r1\ta.mat\tfit\t168\t42\t30.7\t0.5\t10\n"))
     assert table.loc["r1", "normal_load_n"] == 0.5
-    assert ingest_options(table.loc["r1"]) == ("--role fit --stiffness 168.0 --drive-speed 42.0 "
-                                               "--mass 30.7 --normal-load 0.5 --window 10.0")
+    assert slider_ingest_options(table.loc["r1"]) == (
+        "--role fit --stiffness 168.0 --drive-speed 42.0 --mass 30.7 --normal-load 0.5 "
+        "--window 10.0")
 
 
 @pytest.mark.parametrize(("rows", "message"), [
@@ -52,5 +57,5 @@ def test_a_missing_table_is_named(tmp_path: Path) -> None:
 
 
 def test_the_fit_options_are_the_settings() -> None:
-    assert fit_options(SLIDER_DEFAULTS) == (
+    assert slider_fit_options(SLIDER_DEFAULTS) == (
         "--members 4 --design 8 --acquisitions 6 --exploration 2.0 --samples 2000 --seed 0")

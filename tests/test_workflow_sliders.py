@@ -57,7 +57,8 @@ def test_the_reduced_colas_campaign_fits_two_records_and_predicts_the_third(work
     assert run.returncode == 0, run.stderr[-3000:]
     fit = json.loads((workdir / "results/sliders/fit.json").read_text())
     assert fit["records"] == ["k168_v1100", "k1002_v4300"]  # the held-out record is not read
-    assert fit["guesses"] == 8
+    assert fit["guesses"] == 8  # the sliders section's settings, not the slab fit's
+    assert fit["settings"]["members"] == 2
     for name in ("a", "b", "dc", "mu0"):
         low, high = fit["parameters"][name]["low"], fit["parameters"][name]["high"]
         assert low <= fit["parameters"][name]["median"] <= high

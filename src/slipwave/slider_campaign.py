@@ -80,7 +80,7 @@ def read_slider_campaign(path: str | PathLike[str]) -> pd.DataFrame:
     return table.set_index("record_id")
 
 
-def ingest_options(record: pd.Series) -> str:
+def slider_ingest_options(record: pd.Series) -> str:
     """``slipwave slider-ingest``'s options for a record of the table.
 
     Parameters
@@ -100,7 +100,7 @@ def ingest_options(record: pd.Series) -> str:
         f"--{option} {float(record[column])!r}" for option, column in numbers.items())
 
 
-def fit_options(settings: Mapping[str, Any]) -> str:
+def slider_fit_options(settings: Mapping[str, Any]) -> str:
     """``slipwave slider-fit``'s options from the config's ``sliders`` section.
 
     Parameters

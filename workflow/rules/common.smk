@@ -9,7 +9,7 @@ def scaled_memory(megabytes):
 
 
 def slider_bench_options(wildcards):
-    return ingest_options(SLIDERS.loc[wildcards.record_id])
+    return slider_ingest_options(SLIDERS.loc[wildcards.record_id])
 
 
 def test_row(wildcards):

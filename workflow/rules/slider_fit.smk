@@ -8,7 +8,7 @@ rule slider_fit:
     log:
         "results/logs/slider_fit.log",
     params:
-        settings=slider_fit_options,
+        settings=slider_fit_options(config["sliders"]),
     threads: 2
     resources:
         mem_mb=1500,
