@@ -91,3 +91,10 @@ def test_predict_refuses_a_record_as_posterior(records: dict[str, Path], tmp_pat
                  "-o", str(tmp_path / "x.json")])
     assert code != 0
     assert "not a spring-slider posterior" in capsys.readouterr().err
+
+
+def test_check_config_reads_a_spring_slider_campaign(capsys: pytest.CaptureFixture[str],
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(Path(__file__).parents[1])
+    assert main(["check-config", "config/colas.yaml"]) == 0
+    assert "9 spring-slider records in config/colas.tsv (6 to fit)" in capsys.readouterr().out

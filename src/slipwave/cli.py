@@ -467,6 +467,15 @@ def _check_config(args: argparse.Namespace) -> None:
     # reader names no line when a file is not YAML
     config = check_config_files([args.workflow_config, *args.configs], load_schema("config"),
                                 command_line=args.configs)
+    if config.get("kind") == "spring_slider":
+        from slipwave.slider_campaign import read_slider_campaign
+
+        records = config.get("sliders", {}).get(
+            "records", default.setting_schema("sliders", "records")["default"])
+        table = read_slider_campaign(records)
+        print(f"{', '.join(map(str, args.configs))}: valid; {len(table)} spring-slider "
+              f"records in {records} ({(table['role'] == 'fit').sum()} to fit)")
+        return
     campaign = read_campaign(config["tests"])
     check_campaign(config, campaign, load_schema("tests"))
     print(f"{', '.join(map(str, args.configs)) or args.workflow_config}: valid; "
