@@ -57,5 +57,6 @@ def test_a_missing_table_is_named(tmp_path: Path) -> None:
 
 
 def test_the_fit_options_are_the_settings() -> None:
-    assert slider_fit_options(SLIDER_DEFAULTS) == (
-        "--members 4 --design 8 --acquisitions 6 --exploration 2.0 --samples 2000 --seed 0")
+    assert slider_fit_options({**SLIDER_DEFAULTS, "evolution": "aging"}) == (
+        "--members 4 --design 8 --acquisitions 6 --exploration 2.0 --samples 2000 --seed 0 "
+        "--evolution aging")

@@ -723,7 +723,8 @@ def _slider_fit(args: argparse.Namespace) -> None:
     records = [record_of(dataset) for dataset in datasets]
     settings = SliderFitSettings(members=args.members, design=args.design,
                                  acquisitions=args.acquisitions, exploration=args.exploration,
-                                 samples=args.samples, processes=args.processes, seed=args.seed)
+                                 samples=args.samples, processes=args.processes, seed=args.seed,
+                                 evolution=args.evolution)
     posterior = fit_records(records, settings, progress=print)
     seconds = clock.perf_counter() - started
     dataset = posterior_dataset(posterior, settings, seconds)
@@ -1204,7 +1205,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     slider_fit = commands.add_parser(
         "slider-fit", help="fit rate-and-state friction to spring-slider records jointly",
-        description="Fit a, b - a, log10 Dc and mu0 of rate-and-state friction (aging law) "
+        description="Fit a, b - a, log10 Dc and mu0 of rate-and-state friction (--evolution) "
         "to the records given, all at once, by a synthetic likelihood over their windows' "
         "features and a Gaussian-process search (slipwave.fit.slider).")
     slider_fit.add_argument("records", type=_input, nargs="+",
@@ -1219,6 +1220,9 @@ def build_parser() -> argparse.ArgumentParser:
                 f"--{key}", type=_setting("sliders", key), default=default.SLIDER_DEFAULTS[key],
                 help=default.setting_schema("sliders", key)["description"].replace("%", "%%")
                 + " (%(default)s)")
+    slider_fit.add_argument("--evolution", choices=["aging", "slip"],
+                            default=default.SLIDER_EVOLUTION,
+                            help="the state's evolution law fitted (%(default)s)")
     slider_fit.add_argument("--processes", type=_positive_int, default=1,
                             help="worker processes for the guesses (%(default)s)")
     slider_fit.set_defaults(run=_slider_fit)

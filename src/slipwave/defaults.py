@@ -147,3 +147,5 @@ SLIDER_TUNABLES: tuple[str, ...] = ("members", "design", "acquisitions", "explor
 of ``slipwave slider-predict``) of its name."""
 SLIDER_DEFAULTS: dict[str, Any] = {key: _setting("sliders", key) for key in SLIDER_TUNABLES}
 """Their defaults."""
+SLIDER_EVOLUTION: str = _setting("sliders", "evolution")
+"""The state's evolution law the spring-slider fit uses by default."""

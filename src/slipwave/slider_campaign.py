@@ -113,4 +113,5 @@ def slider_fit_options(settings: Mapping[str, Any]) -> str:
     str
         One option per setting the command takes.
     """
-    return " ".join(f"--{key} {settings[key]!r}" for key in SLIDER_TUNABLES if key != "draws")
+    return " ".join([f"--{key} {settings[key]!r}" for key in SLIDER_TUNABLES if key != "draws"]
+                    + [f"--evolution {settings['evolution']}"])

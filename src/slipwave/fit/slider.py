@@ -29,7 +29,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import multivariate_normal, qmc
 
-from slipwave.defaults import SLIDER_DEFAULTS
+from slipwave.defaults import SLIDER_DEFAULTS, SLIDER_EVOLUTION
 from slipwave.errors import SlipwaveError
 from slipwave.events.steps import noise_level
 from slipwave.events.stick_slip import FEATURES, regime_of, slider_window_features
@@ -191,21 +191,24 @@ def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_spee
                         noise_level(ratio), regime_of(whole["stuck_share"]))
 
 
-def law_at(point: np.ndarray) -> RateState:
+def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
     """The law at a point of the search's coordinates (:data:`PARAMETERS`).
 
     Parameters
     ----------
     point
         (a, b - a, log10 Dc, mu0).
+    evolution
+        The state's evolution law, ``"aging"`` or ``"slip"``.
 
     Returns
     -------
     RateState
-        The aging law there (v0 1 um/s).
+        The law there (v0 1 um/s).
     """
     a, excess, log_dc, mu0 = (float(value) for value in point)
-    return RateState(a=a, b=a + excess, dc=10.0**log_dc, mu0=mu0)
+    return RateState(a=a, b=a + excess, dc=10.0**log_dc, mu0=mu0,
+                     evolution=evolution)  # type: ignore[arg-type]
 
 
 def simulated_windows(record: SliderRecord, law: RateState, members: int, seed: int
@@ -290,6 +293,8 @@ class SliderFitSettings:
         Worker processes for the guesses' simulations.
     seed
         The fit's seed.
+    evolution
+        The state's evolution law fitted.
 
     """
 
@@ -300,10 +305,11 @@ class SliderFitSettings:
     samples: int = SLIDER_DEFAULTS["samples"]
     processes: int = 1
     seed: int = SLIDER_DEFAULTS["seed"]
+    evolution: str = SLIDER_EVOLUTION
 
 
 def loglik(records: Sequence[SliderRecord], point: np.ndarray, members: int,
-           seed: int) -> float:
+           seed: int, evolution: str = SLIDER_EVOLUTION) -> float:
     """The records' summed synthetic log-likelihood at a point.
 
     Parameters
@@ -316,13 +322,15 @@ def loglik(records: Sequence[SliderRecord], point: np.ndarray, members: int,
         Simulated windows per record.
     seed
         The noise's seed (the same at every point).
+    evolution
+        The state's evolution law.
 
     Returns
     -------
     float
         The sum over the records of :func:`record_loglik`.
     """
-    law = law_at(point)
+    law = law_at(point, evolution)
     return float(sum(record_loglik(record, simulated_windows(record, law, members, seed + i))
                      for i, record in enumerate(records)))
 
@@ -330,14 +338,15 @@ def loglik(records: Sequence[SliderRecord], point: np.ndarray, members: int,
 def _evaluate(records: Sequence[SliderRecord], points: np.ndarray, settings: SliderFitSettings
               ) -> np.ndarray:
     """Log-likelihoods at points, on the settings' processes."""
-    jobs = [(records, point, settings.members, settings.seed) for point in points]
+    jobs = [(records, point, settings.members, settings.seed, settings.evolution)
+            for point in points]
     if settings.processes <= 1:
         return np.array([loglik(*job) for job in jobs])
     with ProcessPoolExecutor(settings.processes) as pool:
         return np.array(list(pool.map(_loglik_job, jobs)))
 
 
-def _loglik_job(job: tuple[Sequence[SliderRecord], np.ndarray, int, int]) -> float:
+def _loglik_job(job: tuple[Sequence[SliderRecord], np.ndarray, int, int, str]) -> float:
     """:func:`loglik` of one job (a picklable call for the process pool)."""
     return loglik(*job)
 
@@ -368,6 +377,8 @@ class SliderPosterior:
         The guesses evaluated and their summed synthetic log-likelihoods.
     records
         The names of the records fitted.
+    evolution
+        The state's evolution law fitted.
 
     """
 
@@ -375,6 +386,7 @@ class SliderPosterior:
     points: np.ndarray
     logliks: np.ndarray
     records: tuple[str, ...]
+    evolution: str = SLIDER_EVOLUTION
 
     def interval(self, probability: float = 0.95) -> dict[str, tuple[float, float, float]]:
         """Each parameter's median and central interval (b and Dc in their own units).
@@ -438,7 +450,8 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
     best = points[finite][np.argsort(logliks[finite])[-4:]]
     samples = sample_posterior(process, PRIOR_BOX, _inside, best, samples=settings.samples,
                                seed=settings.seed)
-    return SliderPosterior(samples, points, logliks, tuple(r.name for r in records))
+    return SliderPosterior(samples, points, logliks, tuple(r.name for r in records),
+                           settings.evolution)
 
 
 def predict_record(record: SliderRecord, posterior: SliderPosterior, draws: int,
@@ -467,7 +480,8 @@ def predict_record(record: SliderRecord, posterior: SliderPosterior, draws: int,
     """
     rng = np.random.default_rng(seed)
     picks = posterior.samples[rng.choice(len(posterior.samples), draws, replace=False)]
-    windows = np.vstack([simulated_windows(record, law_at(point), members, seed + i)
+    windows = np.vstack([simulated_windows(record, law_at(point, posterior.evolution),
+                                           members, seed + i)
                          for i, point in enumerate(picks)])
     windows = windows[np.all(np.isfinite(windows), axis=1)]
     recurrence = FEATURES.index("recurrence")
@@ -509,6 +523,7 @@ def posterior_json(posterior: SliderPosterior, settings: SliderFitSettings,
     """
     return json.dumps({
         "records": list(posterior.records),
+        "evolution": posterior.evolution,
         "parameters": {name: dict(zip(("median", "low", "high"), values, strict=True))
                        for name, values in posterior.interval().items()},
         "guesses": len(posterior.points),
@@ -577,7 +592,8 @@ def posterior_dataset(posterior: SliderPosterior, settings: SliderFitSettings,
                     {"long_name": "summed synthetic log-likelihood of the fitted records"})},
         coords={"parameter": list(PARAMETERS)},
         attrs={"title": "rate-and-state friction fitted to spring-slider records",
-               "records": " ".join(posterior.records), "seconds": seconds,
+               "records": " ".join(posterior.records), "evolution": posterior.evolution,
+               "seconds": seconds,
                **{f"setting_{name}": value for name, value in asdict(settings).items()}},
     )
 
@@ -596,4 +612,5 @@ def posterior_of(dataset: xr.Dataset) -> SliderPosterior:
         Its samples, guesses and records.
     """
     return SliderPosterior(dataset["samples"].values, dataset["guesses"].values,
-                           dataset["loglik"].values, tuple(str(dataset.attrs["records"]).split()))
+                           dataset["loglik"].values, tuple(str(dataset.attrs["records"]).split()),
+                           str(dataset.attrs["evolution"]))
