@@ -11,6 +11,7 @@ r"""The campaign table of spring-slider records: one row per record, checked lin
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
@@ -51,14 +52,17 @@ def read_slider_campaign(path: str | PathLike[str]) -> pd.DataFrame:
     """
     path = Path(path)
     try:
-        table = pd.read_csv(path, sep="\t", comment="#", dtype=str, keep_default_na=False,
-                            skip_blank_lines=True)
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError as error:
         raise ConfigError(f"{path}: spring-slider campaign table not found") from error
-    except (OSError, UnicodeDecodeError, pd.errors.ParserError) as error:
+    except (OSError, UnicodeDecodeError) as error:
         raise ConfigError(f"{path}: not a readable table ({error})") from error
-    text_lines = [number for number, line in
-                  enumerate(path.read_text(encoding="utf-8-sig").splitlines(), start=1)
+    try:
+        table = pd.read_csv(io.StringIO(text), sep="\t", comment="#", dtype=str,
+                            keep_default_na=False, skip_blank_lines=True)
+    except pd.errors.ParserError as error:
+        raise ConfigError(f"{path}: not a readable table ({error})") from error
+    text_lines = [number for number, line in enumerate(text.splitlines(), start=1)
                   if line.strip() and not line.lstrip().startswith("#")]
     schema = load_schema("sliders")
     if "normal_load_n" not in table.columns:

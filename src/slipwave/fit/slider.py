@@ -19,6 +19,7 @@ upper confidence bound is highest, then emcee on prior x exp(surrogate).
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -91,6 +92,8 @@ class SliderRecord:
         The standard deviations of the record's windows' features.
     noise
         The record's white-noise standard deviation (added to the simulations).
+    sample_rate
+        The record's samples per second (the simulations are sampled alike).
     regime
         The record's regime (from its whole length).
 
@@ -106,6 +109,7 @@ class SliderRecord:
     windows: int
     spread: tuple[float, ...]
     noise: float
+    sample_rate: float
     regime: str
 
     @property
@@ -188,7 +192,8 @@ def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_spee
                         tuple(vectors.mean(axis=0)), vectors.shape[0],
                         tuple(vectors.std(axis=0, ddof=1) if len(vectors) > 1
                               else np.zeros(vectors.shape[1])),
-                        noise_level(ratio), regime_of(whole["stuck_share"]))
+                        noise_level(ratio), 1.0 / float(time[1] - time[0]),
+                        regime_of(whole["stuck_share"]))
 
 
 def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
@@ -231,7 +236,7 @@ def simulated_windows(record: SliderRecord, law: RateState, members: int, seed: 
     numpy.ndarray
         Shape (members, features); NaN rows where the integration failed.
     """
-    rate = 2000.0
+    rate = record.sample_rate
     duration = (SPIN_UP_WINDOWS + members) * record.window
     start = float(steady_friction(law, record.drive_speed)) - 1e-3
     try:
@@ -335,15 +340,14 @@ def loglik(records: Sequence[SliderRecord], point: np.ndarray, members: int,
                      for i, record in enumerate(records)))
 
 
-def _evaluate(records: Sequence[SliderRecord], points: np.ndarray, settings: SliderFitSettings
-              ) -> np.ndarray:
-    """Log-likelihoods at points, on the settings' processes."""
+def _evaluate(records: Sequence[SliderRecord], points: np.ndarray, settings: SliderFitSettings,
+              pool: ProcessPoolExecutor | None) -> np.ndarray:
+    """Log-likelihoods at points, on the fit's pool of processes if it has one."""
     jobs = [(records, point, settings.members, settings.seed, settings.evolution)
             for point in points]
-    if settings.processes <= 1:
+    if pool is None:
         return np.array([loglik(*job) for job in jobs])
-    with ProcessPoolExecutor(settings.processes) as pool:
-        return np.array(list(pool.map(_loglik_job, jobs)))
+    return np.array(list(pool.map(_loglik_job, jobs)))
 
 
 def _loglik_job(job: tuple[Sequence[SliderRecord], np.ndarray, int, int, str]) -> float:
@@ -431,20 +435,25 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
         The posterior samples and the guesses.
     """
     dimensions = PRIOR_BOX.shape[0]
-    points = _prior_draws(settings.design * dimensions, settings.seed)
-    logliks = _evaluate(records, points, settings)
     say = progress or (lambda _: None)
-    say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
     rng = np.random.default_rng(settings.seed)
-    batch = ACQUISITION_BATCH
-    for round_ in range(0, settings.acquisitions * dimensions, batch):
-        finite = np.isfinite(logliks)
-        process = surrogate(points[finite], logliks[finite], PRIOR_BOX, settings.seed + round_)
-        candidates = _prior_draws(4000, rng)
-        chosen = candidates[np.argsort(process.upper(candidates, settings.exploration))[-batch:]]
-        points = np.vstack([points, chosen])
-        logliks = np.append(logliks, _evaluate(records, chosen, settings))
-        say(f"acquisitions: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
+    # one pool for the whole search: its workers import slipwave once
+    with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
+          else contextlib.nullcontext()) as pool:
+        points = _prior_draws(settings.design * dimensions, settings.seed)
+        logliks = _evaluate(records, points, settings, pool)
+        say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
+        for round_ in range(0, settings.acquisitions * dimensions, ACQUISITION_BATCH):
+            finite = np.isfinite(logliks)
+            process = surrogate(points[finite], logliks[finite], PRIOR_BOX,
+                                settings.seed + round_)
+            candidates = _prior_draws(4000, rng)
+            upper = process.upper(candidates, settings.exploration)
+            chosen = candidates[np.argsort(upper)[-ACQUISITION_BATCH:]]
+            points = np.vstack([points, chosen])
+            logliks = np.append(logliks, _evaluate(records, chosen, settings, pool))
+            say(f"acquisitions: {len(points)} guesses, best log-likelihood "
+                f"{np.max(logliks):.1f}")
     finite = np.isfinite(logliks)
     process = surrogate(points[finite], logliks[finite], PRIOR_BOX, settings.seed)
     best = points[finite][np.argsort(logliks[finite])[-4:]]

@@ -64,6 +64,8 @@ def read_slider_record(path: str | PathLike[str]) -> xr.Dataset:
     path = Path(path)
     try:
         contents = scipy.io.loadmat(path)
+    # scipy reads MAT versions 4 to 7.2; a 7.3 file (HDF5) makes it raise
+    # NotImplementedError, a file that is no MAT file MatReadError or ValueError
     except (OSError, ValueError, TypeError, NotImplementedError,
             scipy.io.matlab.MatReadError) as error:
         raise AcquisitionError(path, f"not a readable MAT file ({error})") from error

@@ -230,7 +230,8 @@ def simulate_spring_slider(
     ratio = float(steady_friction(law, steady_speed)) if initial_ratio is None else initial_ratio
     # the slider starts at the speed at which the law carries the spring's force
     state = np.array([ratio, log_state])
-    inertial = bench.mass > 0 and float(slip_rate(law, ratio, log_state)) > _slow(law, pieces[0][2])
+    start_slip = float(slip_rate(law, ratio, log_state))
+    inertial = bench.mass > 0 and start_slip > _slow(law, start_speed)
     columns, used = [], set()
     for number, (begin, end, drive_speed) in enumerate(pieces):
         last = number == len(pieces) - 1
