@@ -56,6 +56,16 @@ def test_steady_sliding_has_no_slip() -> None:
     assert regime_of(features["stuck_share"]) == "sliding"
 
 
+def test_one_sample_spikes_are_no_slips() -> None:
+    time = np.arange(0.0, 5.0, 1 / RATE)
+    ratio = 0.3 + np.random.default_rng(2).normal(0.0, 0.002, time.size)
+    ratio[::400] -= 0.15  # a spike every 0.2 s, each one sample long (as in the Colas records)
+    ratio[1::800] -= 0.15  # and a pair of samples every 0.4 s
+    features = slider_window_features(time, ratio, **BENCH)
+    assert features["drop"] == 0.0
+    assert regime_of(features["stuck_share"]) == "sliding"
+
+
 def test_the_low_pass_keeps_the_inertial_oscillation_and_drops_the_noise() -> None:
     natural = np.sqrt(BENCH["stiffness"] / BENCH["mass"]) / (2 * np.pi)  # 29 Hz
     time = np.arange(0.0, 4.0, 1 / RATE)

@@ -1,7 +1,8 @@
 """Events of a friction test: load drops, edge jumps, slips, phases, friction ratios.
 
 Detection is composable, in the manner of a seismic trigger: a characteristic
-signal and its noise (:func:`noise_level`, :func:`despike`), thresholds and
+signal and its noise (:func:`noise_level`, :func:`despike`, :func:`without_spikes`),
+thresholds and
 events (:func:`load_drops`, :func:`edge_jumps`), then slips (:func:`classify_events`,
 all of it on a recording: :func:`detect_events`). :func:`events_dataset` and
 :func:`events_table` are the one conversion between the events table and
@@ -18,7 +19,14 @@ from slipwave.events.detect import (
     events_dataset,
     events_table,
 )
-from slipwave.events.steps import STEP_COLUMNS, despike, edge_jumps, load_drops, noise_level
+from slipwave.events.steps import (
+    STEP_COLUMNS,
+    despike,
+    edge_jumps,
+    load_drops,
+    noise_level,
+    without_spikes,
+)
 from slipwave.events.summary import (
     PHASES,
     friction_ratio,
@@ -54,4 +62,5 @@ __all__ = [
     "segment_phases",
     "summary_row",
     "wave_counts",
+    "without_spikes",
 ]

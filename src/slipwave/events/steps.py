@@ -487,7 +487,7 @@ def refine_step(
     span = max(bottom - top, 2 * max_spike + 1)
     start = max(low, top - max(span, 24))
     stop = min(high, bottom + max(span, 24))
-    window = _without_spikes(values[start:stop], max_spike)
+    window = without_spikes(values[start:stop], max_spike)
     top_local = int(np.argmax(window[: max(top - start, 0) + span // 2 + 1]))
     rest = window[top_local:]
     bottom_local = top_local + int(np.argmin(rest[: bottom - start - top_local + span + 1]))
@@ -531,12 +531,31 @@ def _line_at(values: np.ndarray, at: int) -> float:
     return mean + iv / ii * (at - centre)
 
 
-def _without_spikes(values: np.ndarray, max_spike: int) -> np.ndarray:
-    """``values`` with spikes replaced by the running median.
+def without_spikes(values: np.ndarray, max_spike: int = MAX_SPIKE) -> np.ndarray:
+    """A signal with its spikes replaced by its running median, at its own rate.
 
     Only samples further than a robust 5 sigma from the running median of
-    ``2 * max_spike + 1`` samples are replaced: the others, kinks included,
-    stay as recorded, so the fits that place onsets are not blurred.
+    ``2 * max_spike + 1`` samples are replaced (any departure from it, where most
+    samples lie on it and sigma is nothing): the others, kinks included, stay as
+    recorded, so the fits that place onsets are not blurred (where :func:`despike`'s
+    block medians lower the rate).
+
+    Parameters
+    ----------
+    values
+        The signal.
+    max_spike
+        Longest spike replaced, samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        The signal, spikes replaced (as long as ``values``).
+
+    Examples
+    --------
+    >>> without_spikes(np.array([2.0, 2.0, 9.0, 2.0, 2.0, 2.0, -5.0, 2.0, 2.0]))
+    array([2., 2., 2., 2., 2., 2., 2., 2., 2.])
     """
     values = np.asarray(values, dtype=float)
     if max_spike < 1 or values.size < 2 * max_spike + 1:
@@ -546,7 +565,7 @@ def _without_spikes(values: np.ndarray, max_spike: int) -> np.ndarray:
 
 @njit(cache=True)
 def _despiked(values: np.ndarray, half: int, mad_to_sigma: float) -> np.ndarray:
-    """:func:`_without_spikes`, compiled: a fit's members call it for every fall.
+    """:func:`without_spikes`, compiled: a fit's members call it for every fall.
 
     The running median repeats the end samples beyond the ends (as
     ``scipy.ndimage.median_filter``'s ``"nearest"``), of an odd count: exact.
@@ -759,7 +778,7 @@ def _changes_at(time: np.ndarray, values: np.ndarray, drops: pd.DataFrame, *, si
         jump = after - before
         # when the signal had made half its change: which edge moved first
         low = max(start - width, 0)
-        window = _without_spikes(values[low : end + width], max_spike)
+        window = without_spikes(values[low : end + width], max_spike)
         crossed = np.flatnonzero(np.sign(jump) * (window - before) >= 0.5 * abs(jump))
         middle = low + int(crossed[0]) if crossed.size and jump != 0 else int(start)
         rows.append((middle, time[middle], end, time[end], max(before, after),

@@ -1,9 +1,11 @@
 """What a spring-slider record says: its slips' drops and recurrence, its creep, its regime.
 
 A spring-slider's force over the normal load f rises at K V / N while the slider
-is stuck and falls when it slips. The record is low-passed at a multiple of the
-bench's natural frequency (a zero-phase Butterworth filter: the sensor's white
-noise goes, the slips and the inertial oscillations stay), its drops are found
+is stuck and falls when it slips. The record's impulsive spikes are taken out first
+(:func:`slipwave.events.without_spikes`, at the record's own rate), then it is
+low-passed at a multiple of the bench's natural frequency (a
+zero-phase Butterworth filter: the sensor's white noise goes, the slips and the
+inertial oscillations stay), its drops are found
 by :func:`slipwave.events.load_drops` with a fixed smallest drop, and each window
 of it is summarised by:
 
@@ -33,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from slipwave.events.steps import load_drops
+from slipwave.events.steps import load_drops, without_spikes
 
 LOWPASS_NATURAL_MULTIPLE = 3.0
 """The low-pass filter's corner, in multiples of the bench's natural frequency
@@ -127,7 +129,12 @@ def slider_window_features(time: np.ndarray, ratio: np.ndarray, *, stiffness: fl
         slips there are (``drop`` 0 and ``creep`` 1 with none).
     """
     time = np.asarray(time, dtype=float)
-    smooth = lowpass(ratio, 1.0 / float(time[1] - time[0]), stiffness=stiffness, mass=mass)
+    # Spikes go before the low-pass, which would spread each into a slip of 0.02-0.03 (a
+    # Colas record's one-sample spikes made two thirds of its counted slips); at the
+    # record's rate, as despike's block medians would make load_drops' own spike rule take
+    # an inertial oscillation's quick drops for spikes.
+    smooth = lowpass(without_spikes(np.asarray(ratio, dtype=float)),
+                     1.0 / float(time[1] - time[0]), stiffness=stiffness, mass=mass)
     drops = load_drops(time, smooth, min_drop=MIN_DROP)
     span = float(time[-1] - time[0])
     loading = stiffness * drive_speed / normal_load
