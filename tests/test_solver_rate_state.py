@@ -14,7 +14,7 @@ from slipwave.solver.rate_state import (
     state_rate,
     steady_friction,
 )
-from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
+from slipwave.solver.spring_slider import SpringSlider, _inertial, simulate_spring_slider
 
 # rsfmodel's velocity steps (jrleeman/rsfmodel, tests/rsf_tests.py, MIT licence, (c) 2015
 # John Leeman): mu0 0.6, v0 1, k 1e-3 per unit length, Dc 10, the load point stepped
@@ -57,11 +57,75 @@ RUINA = {  # slip law, a 0.01, b 0.005
         10.00000156, 10.00000083, 10.00000027, 10.00000002, 9.99999995, 9.99999996,
         9.99999998, 9.99999999],
 }
+DIETERICH_TWO = {  # aging law, a 0.012, b 0.0185 (Dc 5), b2 0.0088 (Dc2 50), k 3e-3
+    "friction": [
+        0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.61777816, 0.56719338,
+        0.57926411, 0.58134415, 0.5741353, 0.57495495, 0.57393578, 0.57211002, 0.5714098,
+        0.57046462, 0.56953958, 0.56884951, 0.56819716, 0.56762505, 0.56715188, 0.56674236,
+        0.5663961, 0.56610841, 0.56586767, 0.565668, 0.56550353, 0.56536809, 0.56525698,
+        0.56516614, 0.56509194, 0.56503146, 0.56498223, 0.5649422, 0.56490967, 0.56488327
+    ],
+    "state": [
+        5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 2.80081321, 0.26257732,
+        0.67749062, 0.5128508, 0.43041648, 0.506089, 0.47944593, 0.47554365, 0.48734539,
+        0.4843392, 0.48564166, 0.48855901, 0.48933082, 0.49072826, 0.4922033, 0.49326055,
+        0.49430172, 0.4952396, 0.49601255, 0.49668913, 0.4972666, 0.49774673, 0.49815004,
+        0.49848567, 0.49876233, 0.4989905, 0.4991779, 0.4993312, 0.49945649, 0.49955867
+    ],
+    "state_2": [
+        50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 47.03349418,
+        28.26143675, 26.02288006, 22.50536043, 18.45103796, 16.09903009, 13.99322929,
+        12.21984746, 10.8626045, 9.74109978, 8.83011044, 8.10068484, 7.50795792, 7.02833114,
+        6.64119123, 6.32770427, 6.07410906, 5.86906354, 5.70314217, 5.56890919, 5.46032285,
+        5.37246346, 5.30137737, 5.243863, 5.1973259, 5.1596709, 5.12920263, 5.1045488,
+        5.08459968, 5.06845739
+    ],
+    "slider_speed": [
+        1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 11.24366669, 9.27431239,
+        6.24880306, 12.6979352, 10.55410214, 9.72918973, 10.76583201, 10.34192569, 10.2410124,
+        10.3510415, 10.25600829, 10.22005129, 10.20908552, 10.17177535, 10.1462882, 10.126265,
+        10.10491673, 10.08761385, 10.07313912, 10.0603132, 10.04968798, 10.04085724,
+        10.03343832, 10.02732652, 10.02229955, 10.01816004, 10.01477376, 10.01200822,
+        10.00975089, 10.00791305
+    ],
+}
+RUINA_TWO = {  # slip law, the same law, k 8e-3
+    "friction": [
+        0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.57317487, 0.57620828,
+        0.57423257, 0.57241419, 0.57098114, 0.56981792, 0.56887496, 0.56810967, 0.56748807,
+        0.56698283, 0.56657196, 0.56623767, 0.56596561, 0.56574412, 0.56556376, 0.56541686,
+        0.5652972, 0.56519972, 0.56512029, 0.56505557, 0.56500283, 0.56495985, 0.56492482,
+        0.56489628, 0.56487301, 0.56485404, 0.56483859, 0.56482599, 0.56481572, 0.56480735
+    ],
+    "state": [
+        5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 5.0, 0.34503501, 0.48718318,
+        0.48688665, 0.48906973, 0.49116621, 0.49281743, 0.49415943, 0.49524843, 0.49613296,
+        0.4968519, 0.49743656, 0.49791223, 0.49829936, 0.49861453, 0.49887118, 0.4990802,
+        0.49925047, 0.49938918, 0.4995022, 0.49959429, 0.49966934, 0.49973049, 0.49978034,
+        0.49982096, 0.49985406, 0.49988105, 0.49990304, 0.49992097, 0.49993558, 0.49994749
+    ],
+    "state_2": [
+        50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 25.46871646,
+        19.28091149, 14.94589606, 12.15504322, 10.28679987, 8.98658279, 8.05413768,
+        7.36902545, 6.85569405, 6.46493829, 6.16365308, 5.92892636, 5.74450566, 5.59861356,
+        5.48255637, 5.38981385, 5.31542877, 5.2555883, 5.20733084, 5.1683369, 5.13677719,
+        5.11120066, 5.09045071, 5.07360177, 5.05991069, 5.04877914, 5.03972433, 5.03235598,
+        5.0263581, 5.02147453
+    ],
+    "slider_speed": [
+        1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 10.81546891, 10.03428877,
+        10.2683735, 10.19823177, 10.16123603, 10.13064517, 10.10597718, 10.08604871,
+        10.06991893, 10.05684658, 10.04624063, 10.03762818, 10.03062956, 10.02493909,
+        10.02031007, 10.01654309, 10.01347665, 10.01097985, 10.00894645, 10.00729017,
+        10.00594089, 10.00484157, 10.00394584, 10.00321593, 10.00262111, 10.00213635,
+        10.00174128, 10.00141929, 10.00115686, 10.00094295
+    ],
+}
 NORMAL_LOAD, MASS = 0.301, 0.0307  # N, kg: the Colas slider
 
 
-def _velocity_step(law: RateState):  # type: ignore[no-untyped-def]
-    bench = SpringSlider(mass=0.0, stiffness=1e-3, drive_speed=1.0, normal_load=1.0)
+def _velocity_step(law: RateState, stiffness: float = 1e-3):  # type: ignore[no-untyped-def]
+    bench = SpringSlider(mass=0.0, stiffness=stiffness, drive_speed=1.0, normal_load=1.0)
     return simulate_spring_slider(bench, law, duration=40.0, sample_rate=1.0,
                                   speed_steps=[(10.0, 10.0)])
 
@@ -77,6 +141,27 @@ def test_velocity_steps_match_rsfmodel(evolution: str, a: float, b: float,
     if "state" in truth:
         np.testing.assert_allclose(np.exp(ds.log_state), truth["state"], rtol=1e-6)
     np.testing.assert_allclose(ds.drive_displacement[[10, 11, 40]], [10.0, 20.0, 310.0])
+
+
+@pytest.mark.parametrize(("evolution", "stiffness", "truth"),
+                         [("aging", 3e-3, DIETERICH_TWO), ("slip", 8e-3, RUINA_TWO)])
+def test_two_state_velocity_steps_match_rsfmodel(evolution: str, stiffness: float,
+                                                 truth: dict[str, list[float]]) -> None:
+    law = RateState(a=0.012, b=0.0185, dc=5.0, b2=0.0088, dc2=50.0, mu0=0.6, v0=1.0,
+                    evolution=evolution)  # type: ignore[arg-type]
+    ds = _velocity_step(law, stiffness)
+    np.testing.assert_allclose(ds.friction_ratio, truth["friction"], rtol=0, atol=2e-8)
+    np.testing.assert_allclose(ds.slider_speed, truth["slider_speed"], rtol=1e-6)
+    np.testing.assert_allclose(np.exp(ds.log_state), truth["state"], rtol=1e-6)
+    np.testing.assert_allclose(np.exp(ds.log_state_2), truth["state_2"], rtol=1e-6)
+
+
+def test_a_second_state_needs_its_length_and_has_no_one_state_bound() -> None:
+    with pytest.raises(SlipwaveError, match="second state"):
+        RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4, b2=0.003)
+    with pytest.raises(SlipwaveError, match="second state"):
+        critical_stiffness(RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4, b2=0.003, dc2=1e-5),
+                           NORMAL_LOAD)
 
 
 def test_regularised_law_is_the_logarithmic_one_away_from_rest() -> None:
@@ -152,6 +237,40 @@ def test_a_soft_spring_sticks_and_slips() -> None:
     # the slider moved as far as the drive, less what the spring took up
     slip = ds.drive_displacement - NORMAL_LOAD / 168.0 * (ds.friction_ratio - ds.friction_ratio[0])
     np.testing.assert_allclose(ds.slip, slip)
+
+
+@pytest.mark.parametrize("law", [
+    RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35),
+    RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, b2=-0.004, dc2=3e-5),
+    RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, b2=0.003, dc2=3e-5, evolution="slip"),
+])
+def test_the_inertial_jacobian_is_the_right_hand_side_s(law: RateState) -> None:
+    """The analytic Jacobian against central differences, in a stick and in a slip."""
+    bench = SpringSlider(mass=MASS, stiffness=1002.0, drive_speed=42e-6, normal_load=NORMAL_LOAD)
+    rhs, jacobian = _inertial(bench, law, 42e-6)
+    count = 1 if law.dc2 is None else 2
+    for state in ([0.36, 0.01] + [np.log(3e-7 / 1e-4)] * count,   # slipping at 0.1 mm/s
+                  [0.34, -0.02] + [np.log(1e-2) + 0.3] * count):  # slowing down
+        y = np.array(state)
+        steps = 1e-7 * np.maximum(1.0, np.abs(y))
+        differences = np.column_stack([
+            (rhs(0.0, y + step * unit) - rhs(0.0, y - step * unit)) / (2 * step)
+            for step, unit in zip(steps, np.eye(y.size), strict=True)])
+        np.testing.assert_allclose(jacobian(0.0, y), differences, rtol=0,
+                                   atol=1e-7 * np.abs(differences).max())
+
+
+def test_an_idle_second_state_changes_no_stick_slip() -> None:
+    """A second state with b2 = 0 leaves the inertial slider's saw-tooth as it was."""
+    bench = SpringSlider(mass=MASS, stiffness=168.0, drive_speed=42e-6, normal_load=NORMAL_LOAD)
+    records = [simulate_spring_slider(bench, law, duration=8.0, sample_rate=2000.0,
+                                      initial_ratio=0.33)
+               for law in (RateState(a=0.01, b=0.02, dc=1e-6, mu0=0.35),
+                           RateState(a=0.01, b=0.02, dc=1e-6, mu0=0.35, b2=0.0, dc2=3e-5))]
+    assert float(records[0].friction_ratio.max() - records[0].friction_ratio.min()) > 0.02
+    np.testing.assert_allclose(records[1].friction_ratio, records[0].friction_ratio,
+                               atol=1e-6)
+    assert "log_state_2" in records[1] and "log_state_2" not in records[0]
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [

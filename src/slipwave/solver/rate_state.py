@@ -17,6 +17,11 @@ and is odd in v, so that a slider at rest carries no friction but what holds it.
 The state is carried as its logarithm, which the aging law sends over tens of
 decades in a long stick.
 
+A second state theta2, with its own memory length Dc2 and effect b2 (of either sign),
+adds b2 ln(v0 theta2 / Dc2) to psi and evolves by the same law (Ruina 1983; Blanpied
+and Tullis 1986 for b2 < 0). A two-state law's ``log_state`` carries the two
+logarithms on its last axis.
+
 >>> law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4)
 >>> round(float(steady_friction(law, 1e-5)), 6)  # 10 v0: (a - b) ln 10 below mu0
 0.388487
@@ -63,6 +68,10 @@ class RateState:
         The reference slip rate, m/s.
     evolution
         ``"aging"`` (Dieterich) or ``"slip"`` (Ruina).
+    b2
+        The second state's evolution effect (0 with no second state).
+    dc2
+        The second state's memory length, m (None: a one-state law).
 
     """
 
@@ -72,21 +81,48 @@ class RateState:
     mu0: float
     v0: float = REFERENCE_SPEED
     evolution: Literal["aging", "slip"] = "aging"
+    b2: float = 0.0
+    dc2: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.a > 0 and self.b >= 0 and self.dc > 0 and self.v0 > 0
-                and np.isfinite([self.a, self.b, self.dc, self.mu0, self.v0]).all()):
+                and np.isfinite([self.a, self.b, self.dc, self.mu0, self.v0, self.b2]).all()):
             raise SlipwaveError(
                 "rate-and-state friction needs a > 0, b >= 0, dc > 0 and v0 > 0, got "
                 f"a={self.a}, b={self.b}, dc={self.dc}, v0={self.v0}")
+        if (self.dc2 is None and self.b2 != 0.0) or (
+                self.dc2 is not None and not (np.isfinite(self.dc2) and self.dc2 > 0)):
+            raise SlipwaveError(
+                f"a second state needs a memory length dc2 > 0, got b2={self.b2}, "
+                f"dc2={self.dc2}")
         if self.evolution not in EVOLUTION_LAWS:
             raise SlipwaveError(
                 f"unknown state evolution {self.evolution!r}: one of {', '.join(EVOLUTION_LAWS)}")
 
 
+def states(law: RateState) -> tuple[tuple[float, float], ...]:
+    """Each state's evolution effect and memory length, (b, dc) then (b2, dc2).
+
+    Parameters
+    ----------
+    law
+        The friction law.
+
+    Returns
+    -------
+    tuple
+        One (b, dc) pair per state variable, m for dc.
+    """
+    return ((law.b, law.dc),) if law.dc2 is None else ((law.b, law.dc), (law.b2, law.dc2))
+
+
 def _psi(law: RateState, log_state: np.ndarray | float) -> np.ndarray:
-    """The state's part of the friction, mu0 + b ln(v0 theta / dc)."""
-    return law.mu0 + law.b * (np.log(law.v0 / law.dc) + np.asarray(log_state, dtype=float))
+    """The states' part of the friction, mu0 + sum of b ln(v0 theta / dc)."""
+    log_state = np.asarray(log_state, dtype=float)
+    if law.dc2 is None:
+        return law.mu0 + law.b * (np.log(law.v0 / law.dc) + log_state)
+    return law.mu0 + sum(b * (np.log(law.v0 / dc) + log_state[..., i])
+                         for i, (b, dc) in enumerate(states(law)))
 
 
 def friction(law: RateState, speed: np.ndarray | float,
@@ -100,7 +136,8 @@ def friction(law: RateState, speed: np.ndarray | float,
     speed
         The slip rate, m/s (signed: the friction takes its sign).
     log_state
-        The natural logarithm of the state theta (theta in s).
+        The natural logarithm of the state theta (theta in s); a two-state law's two on
+        the last axis.
 
     Returns
     -------
@@ -122,7 +159,8 @@ def slip_rate(law: RateState, friction_coefficient: np.ndarray | float,
     friction_coefficient
         The friction the interface carries (the spring's force over the normal load).
     log_state
-        The natural logarithm of the state theta (theta in s).
+        The natural logarithm of the state theta (theta in s); a two-state law's two on
+        the last axis.
 
     Returns
     -------
@@ -147,24 +185,35 @@ def state_rate(law: RateState, speed: np.ndarray | float,
     speed
         The slip rate, m/s (its magnitude renews the state).
     log_state
-        The natural logarithm of the state theta (theta in s).
+        The natural logarithm of the state theta (theta in s); a two-state law's two on
+        the last axis.
 
     Returns
     -------
     numpy.ndarray
-        d ln(theta) / dt.
+        d ln(theta) / dt (each state's, on the last axis, for a two-state law).
     """
-    rate = np.abs(np.asarray(speed, dtype=float)) / law.dc
+    speed = np.asarray(speed, dtype=float)
     log_state = np.asarray(log_state, dtype=float)
-    if law.evolution == "aging":
+    if law.dc2 is None:
+        return _one_state_rate(law.evolution, speed, log_state, law.dc)
+    return np.stack([_one_state_rate(law.evolution, speed, log_state[..., i], dc)
+                     for i, (_, dc) in enumerate(states(law))], axis=-1)
+
+
+def _one_state_rate(evolution: str, speed: np.ndarray, log_state: np.ndarray, dc: float
+                    ) -> np.ndarray:
+    """D ln(theta) / dt of one state of memory length dc."""
+    rate = np.abs(speed) / dc
+    if evolution == "aging":
         return np.exp(-log_state) - rate
     # slip law: -(v theta / dc) ln(v theta / dc) / theta; at v = 0 the state is frozen
     with np.errstate(divide="ignore", invalid="ignore"):
-        log_ratio = np.log(np.abs(np.asarray(speed, dtype=float)) * np.exp(log_state) / law.dc)
+        log_ratio = np.log(np.abs(speed) * np.exp(log_state) / dc)
         return np.where(rate > 0, -rate * log_ratio, 0.0)
 
 
-def steady_state(law: RateState, speed: float) -> float:
+def steady_state(law: RateState, speed: np.ndarray | float) -> np.ndarray:
     """The logarithm of the steady state at a slip rate, ln(dc / v).
 
     Parameters
@@ -176,14 +225,17 @@ def steady_state(law: RateState, speed: float) -> float:
 
     Returns
     -------
-    float
-        ln(theta_ss).
+    numpy.ndarray
+        ln(theta_ss) (each state's, on the last axis, for a two-state law).
     """
-    return float(np.log(law.dc / speed))
+    speed = np.asarray(speed, dtype=float)
+    if law.dc2 is None:
+        return np.log(law.dc / speed)
+    return np.stack([np.log(dc / speed) for _, dc in states(law)], axis=-1)
 
 
 def steady_friction(law: RateState, speed: np.ndarray | float) -> np.ndarray:
-    """The friction in steady sliding, about mu0 + (a - b) ln(v / v0).
+    """The friction in steady sliding, about mu0 + (a - b - b2) ln(v / v0).
 
     Parameters
     ----------
@@ -197,8 +249,7 @@ def steady_friction(law: RateState, speed: np.ndarray | float) -> np.ndarray:
     numpy.ndarray
         The steady friction coefficient.
     """
-    speed = np.asarray(speed, dtype=float)
-    return friction(law, speed, np.log(law.dc / speed))
+    return friction(law, speed, steady_state(law, speed))
 
 
 def critical_stiffness(law: RateState, normal_load: float, *, mass: float = 0.0,
@@ -225,6 +276,14 @@ def critical_stiffness(law: RateState, normal_load: float, *, mass: float = 0.0,
     -------
     float
         K_c, N/m.
+
+    Raises
+    ------
+    SlipwaveError
+        For a two-state law, whose bound this formula is not (Gu et al. 1984 give it).
     """
+    if law.dc2 is not None:
+        raise SlipwaveError("the critical stiffness here is a one-state law's; this law has "
+                            f"a second state (b2={law.b2}, dc2={law.dc2})")
     inertia = mass * drive_speed**2 / (normal_load * law.a * law.dc)
     return normal_load * (law.b - law.a) / law.dc * (1.0 + inertia)

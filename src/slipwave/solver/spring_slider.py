@@ -7,7 +7,7 @@ records' F / N), v the slider's speed and theta the interface's state:
 
     df/dt = (K / N) (V - v)
     M dv/dt = N (f - mu(v, theta))
-    d ln(theta)/dt  by the law's evolution
+    d ln(theta)/dt  by the law's evolution (each state's, for a two-state law)
 
 Stick is the regularised law's slow creep, so the system is stiff: at a creep
 of 1e-14 m/s the slider's inertia relaxes in under a picosecond, and an arrest
@@ -48,6 +48,7 @@ from slipwave.solver.rate_state import (
     RateState,
     slip_rate,
     state_rate,
+    states,
     steady_friction,
     steady_state,
 )
@@ -105,22 +106,44 @@ class SpringSlider:
 
 
 def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type: ignore[no-untyped-def]
-    """Right-hand side and Jacobian of (f, f - mu, ln theta) for a slider with mass.
+    """Right-hand side and Jacobian of (f, f - mu, ln theta...) for a slider with mass.
 
     The slider's speed is carried by the friction mu it raises, v = 2 v0 exp(-psi/a)
     sinh(mu / a), and mu by its shortfall on the spring's force, e = f - mu, which
     is M dv/dt / N: in a stick v is a creep of 1e-14 m/s or less that no absolute
     tolerance resolves and e is nothing, while the slip's e is of order 0.1.
     """
-    a, b, dc, v0 = law.a, law.b, law.dc, law.v0
+    a, v0 = law.a, law.v0
+    pairs = states(law)
+    weights = [b for b, _ in pairs]
+    lengths = [dc for _, dc in pairs]
     loading, push = bench.stiffness / bench.normal_load, bench.normal_load / bench.mass
-    offset = law.mu0 + b * math.log(v0 / dc)
+    offset = law.mu0 + sum(b * math.log(v0 / dc) for b, dc in pairs)
     aging = law.evolution == "aging"
+    count = len(pairs)
+    # unrolled for one state and an optional second: loops over one or two floats cost
+    # more than the arithmetic in this, the integration's innermost call
+    first_weight, first_length = pairs[0]
+    second_weight, second_length = pairs[-1]
 
-    def parts(y: np.ndarray) -> tuple[float, float, float, float, float, float]:
-        """The speed, d mu/dv, dv/d mu, tanh(mu/a), the state's rate, d(rate)/d|v|."""
-        mu, log_state = y[0] - y[1], y[2]
-        psi = offset + b * log_state
+    def state_rate_slope(log_state: float, length: float, magnitude: float
+                         ) -> tuple[float, float]:
+        """A state's d ln(theta)/dt and its derivative in |v|."""
+        if aging:
+            return math.exp(min(-log_state, EXPONENT_CAP)) - magnitude / length, -1.0 / length
+        if magnitude == 0.0:
+            return 0.0, 0.0
+        log_ratio = math.log(magnitude / length) + log_state
+        return -magnitude / length * log_ratio, -(log_ratio + 1.0) / length
+
+    def parts(y: np.ndarray) -> tuple[float, float, float, float, float, list[float],
+                                      list[float], list[float]]:
+        """The shortfall, speed, d mu/dv, dv/d mu, tanh(mu/a), ln theta, rates, d rates/d|v|."""
+        f, shortfall, *logs = y.tolist()  # plain floats: numpy's scalars are slow here
+        mu = f - shortfall
+        psi = offset + first_weight * logs[0]
+        if count == 2:
+            psi += second_weight * logs[1]
         level = abs(mu) / a
         speed = math.copysign(v0 * math.exp(min(level - psi / a, EXPONENT_CAP))
                               * -math.expm1(-2.0 * level), mu)
@@ -128,50 +151,64 @@ def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type:
             1.0 + math.exp(-2.0 * level))
         compliance = v0 / a * math.exp(min(level - psi / a, EXPONENT_CAP)) * (
             1.0 + math.exp(-2.0 * level))
-        if aging:
-            rate, slope = math.exp(min(-log_state, EXPONENT_CAP)) - abs(speed) / dc, -1.0 / dc
-        elif speed == 0.0:
-            rate, slope = 0.0, 0.0
-        else:
-            log_ratio = math.log(abs(speed) / dc) + log_state
-            rate, slope = -abs(speed) / dc * log_ratio, -(log_ratio + 1.0) / dc
-        return speed, stiffness, compliance, math.tanh(mu / a), rate, slope
+        magnitude = abs(speed)
+        rate, slope = state_rate_slope(logs[0], first_length, magnitude)
+        rates, slopes = [rate], [slope]
+        if count == 2:
+            rate, slope = state_rate_slope(logs[1], second_length, magnitude)
+            rates.append(rate)
+            slopes.append(slope)
+        return (shortfall, speed, stiffness, compliance, math.tanh(mu / a), logs, rates,
+                slopes)
 
     def rhs(_: float, y: np.ndarray) -> np.ndarray:
-        speed, stiffness, _, direction, rate, _ = parts(y)
+        shortfall, speed, stiffness, _compliance, direction, _logs, rates, _slopes = parts(y)
         loading_rate = loading * (drive_speed - speed)
-        friction_rate = push * stiffness * y[1] + b * direction * rate
-        return np.array([loading_rate, loading_rate - friction_rate, rate])
+        evolution = first_weight * rates[0]
+        if count == 2:
+            evolution += second_weight * rates[1]
+        friction_rate = push * stiffness * shortfall + direction * evolution
+        return np.array([loading_rate, loading_rate - friction_rate, *rates])
 
     def jacobian(_: float, y: np.ndarray) -> np.ndarray:
-        shortfall, log_state = y[1], y[2]
-        speed, stiffness, dv_dmu, direction, rate, slope = parts(y)
-        dv_dstate = -b / a * speed
+        shortfall, speed, stiffness, dv_dmu, direction, logs, rates, slopes = parts(y)
         sign = math.copysign(1.0, speed)
-        drate_dmu = slope * sign * dv_dmu
-        drate_dstate = slope * sign * dv_dstate + (
-            -math.exp(min(-log_state, EXPONENT_CAP)) if aging else -abs(speed) / dc)
-        # the friction's rate, push stiffness e + b tanh(mu/a) rate, in mu, e and ln theta
+        dv_dstate = [-b / a * speed for b in weights]
+        # each state's rate in mu and in every ln theta
+        drate_dmu = [slope * sign * dv_dmu for slope in slopes]
+        drate_dstate = [[slope * sign * dv for dv in dv_dstate] for slope in slopes]
+        for i in range(count):
+            drate_dstate[i][i] += (-math.exp(min(-logs[i], EXPONENT_CAP)) if aging
+                                   else -abs(speed) / lengths[i])
+        weighted_rate = sum(b * rate for b, rate in zip(weights, rates, strict=True))
+        # the friction's rate, push stiffness e + tanh(mu/a) sum b rate, in mu, e, ln theta
         friction_dmu = (-push * stiffness * direction / a * shortfall
-                        + b / a * (1.0 - direction**2) * rate + b * direction * drate_dmu)
+                        + (1.0 - direction**2) / a * weighted_rate
+                        + direction * sum(b * d for b, d in zip(weights, drate_dmu,
+                                                                strict=True)))
         friction_de = push * stiffness
-        friction_dstate = push * stiffness * b / a * shortfall + b * direction * drate_dstate
-        loading_row = np.array([-loading * dv_dmu, loading * dv_dmu, -loading * dv_dstate])
-        friction_row = np.array([friction_dmu, friction_de - friction_dmu, friction_dstate])
-        return np.array([loading_row, loading_row - friction_row,
-                         [drate_dmu, -drate_dmu, drate_dstate]])
+        friction_dstate = [push * stiffness * weights[j] / a * shortfall + direction * sum(
+            weights[i] * drate_dstate[i][j] for i in range(count)) for j in range(count)]
+        loading_row = [-loading * dv_dmu, loading * dv_dmu, *(-loading * d for d in dv_dstate)]
+        friction_row = [friction_dmu, friction_de - friction_dmu, *friction_dstate]
+        return np.array([loading_row,
+                         [x - z for x, z in zip(loading_row, friction_row, strict=True)],
+                         *([d, -d, *row] for d, row in zip(drate_dmu, drate_dstate,
+                                                           strict=True))])
 
     return rhs, jacobian
 
 
 def _quasi_static(bench: SpringSlider, law: RateState, drive_speed: float):  # type: ignore[no-untyped-def]
-    """Right-hand side of (f, ln theta) for a massless slider (mu = f at every instant)."""
+    """Right-hand side of (f, ln theta...) for a massless slider (mu = f at every instant)."""
     loading = bench.stiffness / bench.normal_load
+    one = law.dc2 is None
 
     def rhs(_: float, y: np.ndarray) -> np.ndarray:
-        f, log_state = y
-        v = float(slip_rate(law, f, log_state))
-        return np.array([loading * (drive_speed - v), float(state_rate(law, v, log_state))])
+        log_state = y[1] if one else y[1:]
+        v = float(slip_rate(law, y[0], log_state))
+        return np.concatenate([[loading * (drive_speed - v)],
+                               np.atleast_1d(state_rate(law, v, log_state))])
 
     return rhs, None
 
@@ -184,7 +221,7 @@ def simulate_spring_slider(
     sample_rate: float,
     speed_steps: Sequence[tuple[float, float]] = (),
     initial_ratio: float | None = None,
-    initial_log_state: float | None = None,
+    initial_log_state: float | Sequence[float] | None = None,
 ) -> xr.Dataset:
     """Drive a spring-slider and record it at a constant sampling rate.
 
@@ -205,14 +242,16 @@ def simulate_spring_slider(
         The spring's force over the normal load at time 0; steady sliding at the drive
         speed by default.
     initial_log_state
-        ln(theta) at time 0 (theta in s); the steady state at the drive speed by default.
+        ln(theta) at time 0 (theta in s; a two-state law's two); the steady state at the
+        drive speed by default.
 
     Returns
     -------
     xarray.Dataset
         ``friction_ratio`` (the spring's force over the normal load), ``slider_speed``,
-        ``log_state``, ``friction`` (the law's coefficient), ``slip`` and
-        ``drive_displacement`` over ``time``, with the bench and the law as attributes.
+        ``log_state`` (and ``log_state_2`` for a two-state law), ``friction`` (the law's
+        coefficient), ``slip`` and ``drive_displacement`` over ``time``, with the bench
+        and the law as attributes.
 
     Raises
     ------
@@ -226,11 +265,15 @@ def simulate_spring_slider(
     pieces = _drive_pieces(bench.drive_speed, speed_steps, float(times[-1]))
     start_speed = pieces[0][2]
     steady_speed = start_speed if start_speed > 0 else law.v0
-    log_state = steady_state(law, steady_speed) if initial_log_state is None else initial_log_state
+    log_state = np.atleast_1d(steady_state(law, steady_speed) if initial_log_state is None
+                              else np.asarray(initial_log_state, dtype=float))
+    if log_state.size != len(states(law)):
+        raise SlipwaveError(f"the law has {len(states(law))} state(s), the initial state "
+                            f"{log_state.size}")
     ratio = float(steady_friction(law, steady_speed)) if initial_ratio is None else initial_ratio
     # the slider starts at the speed at which the law carries the spring's force
-    state = np.array([ratio, log_state])
-    start_slip = float(slip_rate(law, ratio, log_state))
+    state = np.concatenate([[ratio], log_state])
+    start_slip = float(slip_rate(law, ratio, log_state if law.dc2 else log_state[0]))
     inertial = bench.mass > 0 and start_slip > _slow(law, start_speed)
     columns, used = [], set()
     for number, (begin, end, drive_speed) in enumerate(pieces):
@@ -271,24 +314,25 @@ def _integrate(bench: SpringSlider, law: RateState, drive_speed: float, state: n
                ) -> tuple[np.ndarray, bool, float, np.ndarray, str]:
     """Integrate from ``begin`` until ``end`` or until the slider crosses the slow speed.
 
-    Returns the (f, ln theta) state where it stopped, whether inertia is kept from there,
-    the time it stopped, the rows (f, f - mu, ln theta) at the samples passed, and the
-    method that ran.
+    Returns the (f, ln theta...) state where it stopped, whether inertia is kept from
+    there, the time it stopped, the rows (f, f - mu, ln theta...) at the samples passed,
+    and the method that ran.
     """
     slow = _slow(law, drive_speed)
+    count = state.size - 1
     if inertial:
         rhs, jacobian = _inertial(bench, law, drive_speed)
-        start = np.array([state[0], 0.0, state[1]])
-        tolerance = [ABSOLUTE_TOLERANCE, SHORTFALL_TOLERANCE, ABSOLUTE_TOLERANCE]
+        start = np.concatenate([[state[0], 0.0], state[1:]])
+        tolerance = [ABSOLUTE_TOLERANCE, SHORTFALL_TOLERANCE] + [ABSOLUTE_TOLERANCE] * count
 
         def crossing(_: float, y: np.ndarray) -> float:
-            return _log_speed_above(law, y[0] - y[1], y[2], slow)
+            return _log_speed_above(law, y[0] - y[1], y[2:], slow)
     else:
         rhs, jacobian = _quasi_static(bench, law, drive_speed)
-        start, tolerance = state, [ABSOLUTE_TOLERANCE, ABSOLUTE_TOLERANCE]
+        start, tolerance = state, [ABSOLUTE_TOLERANCE] * (1 + count)
 
         def crossing(_: float, y: np.ndarray) -> float:
-            return _log_speed_above(law, y[0], y[1], slow)
+            return _log_speed_above(law, y[0], y[1:], slow)
     crossing.terminal = True  # type: ignore[attr-defined]
     # with inertia, a slider slowing down leaves it; without, one speeding up takes it
     crossing.direction = -1.0 if inertial else 1.0  # type: ignore[attr-defined]
@@ -322,14 +366,14 @@ def _integrate(bench: SpringSlider, law: RateState, drive_speed: float, state: n
     else:
         stop, last = end, values[:, -1]
     if not inertial:
-        rows = np.vstack([rows[0], np.zeros(rows.shape[1]), rows[1]])
-    # the state carried on: the spring's force and the state; a slider that slows below
+        rows = np.vstack([rows[:1], np.zeros((1, rows.shape[1])), rows[1:]])
+    # the state carried on: the spring's force and the states; a slider that slows below
     # the slow speed gives up its (picosecond-scale) inertial shortfall
-    carried = np.array([last[0], last[-1]])
+    carried = np.concatenate([[last[0]], last[-count:]])
     return carried, (not inertial) if solution.status == 1 else inertial, stop, rows, method
 
 
-def _log_speed_above(law: RateState, mu: float, log_state: float, bound: float) -> float:
+def _log_speed_above(law: RateState, mu: float, log_state: np.ndarray, bound: float) -> float:
     """ln(v / bound) for the speed at which the law carries mu (-700 at rest or backwards).
 
     In logarithms the event is linear in the state between a step's ends, so that its
@@ -337,7 +381,8 @@ def _log_speed_above(law: RateState, mu: float, log_state: float, bound: float) 
     """
     if mu <= 0.0:
         return -700.0
-    psi = law.mu0 + law.b * (math.log(law.v0 / law.dc) + log_state)
+    psi = law.mu0 + sum(b * (math.log(law.v0 / dc) + float(log_state[i]))
+                        for i, (b, dc) in enumerate(states(law)))
     return (math.log(law.v0 / bound) + (mu - psi) / law.a
             + math.log(-math.expm1(-2.0 * mu / law.a)))
 
@@ -358,9 +403,9 @@ def _drive_pieces(drive_speed: float, speed_steps: Sequence[tuple[float, float]]
 def _to_dataset(bench: SpringSlider, law: RateState, times: np.ndarray, values: np.ndarray,
                 pieces: list[tuple[float, float, float]]) -> xr.Dataset:
     """The record as a Dataset with CF attributes."""
-    ratio, log_state = values[0], values[-1]
+    ratio, log_state = values[0], values[2]
     mu = ratio - values[1]
-    speed = slip_rate(law, mu, log_state)
+    speed = slip_rate(law, mu, log_state if law.dc2 is None else values[2:].T)
     drive = np.zeros_like(times)
     for begin, end, drive_speed in pieces:
         inside = times > begin
@@ -371,6 +416,8 @@ def _to_dataset(bench: SpringSlider, law: RateState, times: np.ndarray, values: 
         "friction_ratio": (ratio, "1", "the spring's force over the normal load"),
         "slider_speed": (speed, "m s-1", "the slider's speed"),
         "log_state": (log_state, "1", "natural logarithm of the state theta in seconds"),
+        **({} if law.dc2 is None else {"log_state_2": (
+            values[3], "1", "natural logarithm of the second state theta2 in seconds")}),
         "friction": (mu, "1", "the law's friction coefficient"),
         "slip": (slip, "m", "the slider's displacement"),
         "drive_displacement": (drive, "m", "the displacement of the spring's far end"),
@@ -385,7 +432,8 @@ def _to_dataset(bench: SpringSlider, law: RateState, times: np.ndarray, values: 
         "title": "spring-slider under rate-and-state friction",
         "source": f"slipwave {__version__} spring_slider",
         **{f"bench_{name}": value for name, value in asdict(bench).items()},
-        **{f"law_{name}": value for name, value in asdict(law).items()},
+        **{f"law_{name}": value for name, value in asdict(law).items()
+           if value is not None},  # a one-state law's dc2 is None, which netCDF cannot hold
         "speed_steps": np.array([speed for _, _, speed in pieces]),
         "speed_step_times": np.array([begin for begin, _, _ in pieces]),
     }
