@@ -80,3 +80,21 @@ def test_a_law_the_integrator_cannot_follow_costs_nothing_but_its_likelihood(
                                        4, 0)
     assert np.isnan(members).all()
     assert slider.record_loglik(record, members) == float("-inf")
+
+
+def test_a_two_state_posterior_keeps_its_second_state() -> None:
+    box = slider.prior_box(2)
+    assert box.shape == (6, 2) and len(slider.parameters(2)) == 6
+    law = slider.law_at(np.array([0.01, 0.005, -6.0, 0.35, -0.004, -4.5]))
+    assert law.b2 == -0.004 and law.dc2 == pytest.approx(10**-4.5)
+    samples = box[:, 0] + np.random.default_rng(3).random((50, 6)) * np.diff(box, axis=1)[:, 0]
+    samples[:, 1] = np.abs(samples[:, 1])  # b >= 0
+    posterior = slider.SliderPosterior(samples, samples[:8], np.zeros(8), ("x",))
+    settings = slider.SliderFitSettings(states=2)
+    back = slider.posterior_of(slider.posterior_dataset(posterior, settings, 1.0))
+    assert back.states == 2
+    np.testing.assert_array_equal(back.samples, samples)
+    interval = back.interval()
+    assert box[4, 0] <= interval["b2"][1] <= interval["b2"][0] <= interval["b2"][2] <= box[4, 1]
+    assert 10 ** box[5, 0] <= interval["dc2"][1] < interval["dc2"][2] <= 10 ** box[5, 1]
+    assert slider._inside(samples).all() and not slider._inside(samples[:, :4] * 10).any()

@@ -724,7 +724,7 @@ def _slider_fit(args: argparse.Namespace) -> None:
     settings = SliderFitSettings(members=args.members, design=args.design,
                                  acquisitions=args.acquisitions, exploration=args.exploration,
                                  samples=args.samples, processes=args.processes, seed=args.seed,
-                                 evolution=args.evolution)
+                                 evolution=args.evolution, states=args.states)
     posterior = fit_records(records, settings, progress=print)
     seconds = clock.perf_counter() - started
     dataset = posterior_dataset(posterior, settings, seconds)
@@ -1205,7 +1205,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     slider_fit = commands.add_parser(
         "slider-fit", help="fit rate-and-state friction to spring-slider records jointly",
-        description="Fit a, b - a, log10 Dc and mu0 of rate-and-state friction (--evolution) "
+        description="Fit a, b - a, log10 Dc and mu0 of rate-and-state friction (--evolution; "
+        "and b2, log10 Dc2 of a second state with --states 2) "
         "to the records given, all at once, by a synthetic likelihood over their windows' "
         "features and a Gaussian-process search (slipwave.fit.slider).")
     slider_fit.add_argument("records", type=_input, nargs="+",

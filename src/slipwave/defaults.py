@@ -141,8 +141,8 @@ SAMPLE_RATE_HZ = 100.0
 """Sampling rate of a simulated test's recording, Hz (the virtual bench's card)."""
 
 # Spring-slider campaigns (slipwave.fit.slider; config section ``sliders``).
-SLIDER_TUNABLES: tuple[str, ...] = ("members", "design", "acquisitions", "exploration",
-                                    "samples", "draws", "seed")
+SLIDER_TUNABLES: tuple[str, ...] = ("states", "members", "design", "acquisitions",
+                                    "exploration", "samples", "draws", "seed")
 """The spring-slider fit's settings, each an option of ``slipwave slider-fit`` (``draws``:
 of ``slipwave slider-predict``) of its name."""
 SLIDER_DEFAULTS: dict[str, Any] = {key: _setting("sliders", key) for key in SLIDER_TUNABLES}

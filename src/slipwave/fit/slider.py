@@ -42,12 +42,20 @@ from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
 PARAMETERS = ("a", "b_minus_a", "log10_dc", "mu0")
 """The search's coordinates: a, b - a, log10 of Dc in metres, mu0 (at v0 = 1 um/s)."""
 
+SECOND_STATE_PARAMETERS = ("b2", "log10_dc2")
+"""A two-state law's further coordinates: b2 and log10 of Dc2 in metres."""
+
 PRIOR_BOX = np.array([[0.002, 0.05], [-0.01, 0.03], [-7.0, -4.5], [0.15, 0.6]])
 """The uniform prior's bounds, one row per parameter. a: the direct effect is positive in
 every measurement, 0.002-0.05 from rocks to paper and polymers; b - a: velocity
 strengthening (negative) to strongly weakening; Dc: 0.1 to 30 um, the size of the
 contacts between asperities or paper fibres; mu0: paper on paper's friction, 0.15 to 0.6
 (the Colas records' median levels lie at 0.29-0.51)."""
+
+SECOND_STATE_BOX = np.array([[-0.02, 0.02], [-6.0, -3.0]])
+"""A second state's bounds: b2 of either sign, as large as b (negative, it strengthens
+the interface as it renews: Blanpied and Tullis 1986); Dc2 from 1 um, above the first
+state's lengths that matter, to 1 mm, the longest slip of a Colas record."""
 
 REFERENCE_SCATTER = 0.08
 """The scatter of the reference friction from one record to the next (standard deviation
@@ -196,13 +204,45 @@ def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_spee
                         regime_of(whole["stuck_share"]))
 
 
+def parameters(states: int) -> tuple[str, ...]:
+    """The search's coordinates for a law of one or two states.
+
+    Parameters
+    ----------
+    states
+        State variables, 1 or 2.
+
+    Returns
+    -------
+    tuple of str
+        :data:`PARAMETERS`, then :data:`SECOND_STATE_PARAMETERS` with two states.
+    """
+    return PARAMETERS + (SECOND_STATE_PARAMETERS if states == 2 else ())
+
+
+def prior_box(states: int) -> np.ndarray:
+    """The uniform prior's bounds for a law of one or two states.
+
+    Parameters
+    ----------
+    states
+        State variables, 1 or 2.
+
+    Returns
+    -------
+    numpy.ndarray
+        One row (low, high) per coordinate of :func:`parameters`.
+    """
+    return np.vstack([PRIOR_BOX, SECOND_STATE_BOX]) if states == 2 else PRIOR_BOX
+
+
 def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
-    """The law at a point of the search's coordinates (:data:`PARAMETERS`).
+    """The law at a point of the search's coordinates (:func:`parameters`).
 
     Parameters
     ----------
     point
-        (a, b - a, log10 Dc, mu0).
+        (a, b - a, log10 Dc, mu0), then (b2, log10 Dc2) for a two-state law.
     evolution
         The state's evolution law, ``"aging"`` or ``"slip"``.
 
@@ -211,9 +251,10 @@ def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
     RateState
         The law there (v0 1 um/s).
     """
-    a, excess, log_dc, mu0 = (float(value) for value in point)
+    a, excess, log_dc, mu0 = (float(value) for value in point[:4])
+    second = {"b2": float(point[4]), "dc2": 10.0 ** float(point[5])} if len(point) > 4 else {}
     return RateState(a=a, b=a + excess, dc=10.0**log_dc, mu0=mu0,
-                     evolution=evolution)  # type: ignore[arg-type]
+                     evolution=evolution, **second)  # type: ignore[arg-type]
 
 
 def simulated_windows(record: SliderRecord, law: RateState, members: int, seed: int
@@ -283,6 +324,8 @@ class SliderFitSettings:
 
     Attributes
     ----------
+    states
+        State variables of the law fitted, 1 or 2.
     members
         Simulated windows per record and guess (K).
     design
@@ -303,6 +346,7 @@ class SliderFitSettings:
 
     """
 
+    states: int = SLIDER_DEFAULTS["states"]
     members: int = SLIDER_DEFAULTS["members"]
     design: int = SLIDER_DEFAULTS["design"]
     acquisitions: int = SLIDER_DEFAULTS["acquisitions"]
@@ -358,14 +402,16 @@ def _loglik_job(job: tuple[Sequence[SliderRecord], np.ndarray, int, int, str]) -
 def _inside(points: np.ndarray) -> np.ndarray:
     """Whether points lie in the prior: its box, and b = a + (b - a) >= 0."""
     points = np.atleast_2d(points)
-    return (np.all((points >= PRIOR_BOX[:, 0]) & (points <= PRIOR_BOX[:, 1]), axis=1)
+    box = prior_box(1 if points.shape[1] == len(PARAMETERS) else 2)
+    return (np.all((points >= box[:, 0]) & (points <= box[:, 1]), axis=1)
             & (points[:, 0] + points[:, 1] >= 0.0))
 
 
-def _prior_draws(count: int, rng: np.random.Generator | int) -> np.ndarray:
+def _prior_draws(count: int, rng: np.random.Generator | int, states: int) -> np.ndarray:
     """``count`` Latin hypercube points of the box that lie in the prior (of 4 count drawn)."""
-    sampler = qmc.LatinHypercube(d=PRIOR_BOX.shape[0], seed=rng)
-    points = qmc.scale(sampler.random(4 * count), PRIOR_BOX[:, 0], PRIOR_BOX[:, 1])
+    box = prior_box(states)
+    sampler = qmc.LatinHypercube(d=box.shape[0], seed=rng)
+    points = qmc.scale(sampler.random(4 * count), box[:, 0], box[:, 1])
     return points[_inside(points)][:count]
 
 
@@ -376,7 +422,7 @@ class SliderPosterior:
     Attributes
     ----------
     samples
-        Posterior samples, the search's coordinates (:data:`PARAMETERS`).
+        Posterior samples, the search's coordinates (:func:`parameters`).
     points, logliks
         The guesses evaluated and their summed synthetic log-likelihoods.
     records
@@ -392,6 +438,17 @@ class SliderPosterior:
     records: tuple[str, ...]
     evolution: str = SLIDER_EVOLUTION
 
+    @property
+    def states(self) -> int:
+        """State variables of the law fitted, 1 or 2 (from the coordinates' number).
+
+        Returns
+        -------
+        int
+            1 or 2.
+        """
+        return 1 if self.samples.shape[1] == len(PARAMETERS) else 2
+
     def interval(self, probability: float = 0.95) -> dict[str, tuple[float, float, float]]:
         """Each parameter's median and central interval (b and Dc in their own units).
 
@@ -403,12 +460,15 @@ class SliderPosterior:
         Returns
         -------
         dict
-            ``a``, ``b``, ``dc`` (m), ``mu0``, ``b_minus_a``: (median, low, high).
+            ``a``, ``b``, ``dc`` (m), ``mu0``, ``b_minus_a``, and ``b2``, ``dc2`` (m) for a
+            two-state law: (median, low, high).
         """
         tail = 50.0 * (1.0 - probability)
         values = {"a": self.samples[:, 0], "b": self.samples[:, 0] + self.samples[:, 1],
                   "b_minus_a": self.samples[:, 1], "dc": 10.0 ** self.samples[:, 2],
                   "mu0": self.samples[:, 3]}
+        if self.states == 2:
+            values |= {"b2": self.samples[:, 4], "dc2": 10.0 ** self.samples[:, 5]}
         out = {}
         for name, v in values.items():
             middle, low, high = np.percentile(v, [50.0, tail, 100.0 - tail])
@@ -418,7 +478,7 @@ class SliderPosterior:
 
 def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
                 progress: Callable[[str], None] | None = None) -> SliderPosterior:
-    """The posterior of (a, b - a, log10 Dc, mu0) given records fitted jointly.
+    """The posterior of (a, b - a, log10 Dc, mu0[, b2, log10 Dc2]) given records fitted jointly.
 
     Parameters
     ----------
@@ -434,20 +494,20 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
     SliderPosterior
         The posterior samples and the guesses.
     """
-    dimensions = PRIOR_BOX.shape[0]
+    box = prior_box(settings.states)
+    dimensions = box.shape[0]
     say = progress or (lambda _: None)
     rng = np.random.default_rng(settings.seed)
     # one pool for the whole search: its workers import slipwave once
     with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
           else contextlib.nullcontext()) as pool:
-        points = _prior_draws(settings.design * dimensions, settings.seed)
+        points = _prior_draws(settings.design * dimensions, settings.seed, settings.states)
         logliks = _evaluate(records, points, settings, pool)
         say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
         for round_ in range(0, settings.acquisitions * dimensions, ACQUISITION_BATCH):
             finite = np.isfinite(logliks)
-            process = surrogate(points[finite], logliks[finite], PRIOR_BOX,
-                                settings.seed + round_)
-            candidates = _prior_draws(4000, rng)
+            process = surrogate(points[finite], logliks[finite], box, settings.seed + round_)
+            candidates = _prior_draws(4000, rng, settings.states)
             upper = process.upper(candidates, settings.exploration)
             chosen = candidates[np.argsort(upper)[-ACQUISITION_BATCH:]]
             points = np.vstack([points, chosen])
@@ -455,9 +515,9 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
             say(f"acquisitions: {len(points)} guesses, best log-likelihood "
                 f"{np.max(logliks):.1f}")
     finite = np.isfinite(logliks)
-    process = surrogate(points[finite], logliks[finite], PRIOR_BOX, settings.seed)
+    process = surrogate(points[finite], logliks[finite], box, settings.seed)
     best = points[finite][np.argsort(logliks[finite])[-4:]]
-    samples = sample_posterior(process, PRIOR_BOX, _inside, best, samples=settings.samples,
+    samples = sample_posterior(process, box, _inside, best, samples=settings.samples,
                                seed=settings.seed)
     return SliderPosterior(samples, points, logliks, tuple(r.name for r in records),
                            settings.evolution)
@@ -599,7 +659,7 @@ def posterior_dataset(posterior: SliderPosterior, settings: SliderFitSettings,
                      {"long_name": "the guesses evaluated"}),
          "loglik": ("guess", posterior.logliks,
                     {"long_name": "summed synthetic log-likelihood of the fitted records"})},
-        coords={"parameter": list(PARAMETERS)},
+        coords={"parameter": list(parameters(posterior.states))},
         attrs={"title": "rate-and-state friction fitted to spring-slider records",
                "records": " ".join(posterior.records), "evolution": posterior.evolution,
                "seconds": seconds,
