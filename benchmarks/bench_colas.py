@@ -2,9 +2,10 @@
 
 Rate-and-state friction (aging law) is fitted jointly on the six Colas et al. (2019)
 records at 168 and 1002 N/m with the schema's settings (``slipwave.fit.slider``), on one
-core as the issue asks the time for; the three records at 2254 N/m are read only to be
-compared with their posterior predictive, after the fit. Targets: each held-out record's
-regime predicted right and its median drop and recurrence inside the predictive's 95 %
+core as the issue asks the time for, with one state variable and then with two; the
+three records at 2254 N/m are read only to be compared with each law's posterior
+predictive, after the fits. Targets, for each law: each held-out record's regime
+predicted right and its median drop and recurrence inside the predictive's 95 %
 interval (issue 36).
 Run: python benchmarks/bench_colas.py (needs ../shared/data/colas2019)
 """
@@ -56,15 +57,29 @@ def main() -> None:
         sys.exit(0)
     table = read_slider_campaign(ROOT / "config" / "colas.tsv")
     fitted = [_record(i, row) for i, row in table[table["role"] == "fit"].iterrows()]
-    settings = SliderFitSettings(processes=1)
+    for states in (1, 2):
+        _fit_and_predict(table, fitted, states)
+    finish()
+
+
+def _fit_and_predict(table: pd.DataFrame, fitted: list[SliderRecord], states: int) -> None:
+    tag = f"colas ({states} state{'s' if states > 1 else ''})"
+    settings = SliderFitSettings(processes=1, states=states)
     start = time.perf_counter()
     posterior = fit_records(fitted, settings,
-                            progress=lambda line: print(f"colas: {line}", flush=True))
+                            progress=lambda line: print(f"{tag}: {line}", flush=True))
     seconds = time.perf_counter() - start
-    print(f"colas: six records fitted in {seconds:.0f} s on one core "
+    print(f"{tag}: six records fitted in {seconds:.0f} s on one core "
           f"({len(posterior.points)} guesses)")
     for name, (middle, low, high) in posterior.interval().items():
-        print(f"colas: {name} {middle:.4g} [{low:.4g}, {high:.4g}]")
+        print(f"{tag}: {name} {middle:.4g} [{low:.4g}, {high:.4g}]")
+    for record in fitted:  # in-sample: does the law order the drops with the stiffness?
+        if record.drive_speed < 1e-4:
+            drop = predict_record(record, posterior, SLIDER_DEFAULTS["draws"],
+                                  SLIDER_DEFAULTS["members"], SLIDER_DEFAULTS["seed"])["drop"]
+            print(f"{tag}: fitted {record.name}: drop {drop['measured']:.3g} in "
+                  f"[{drop['low']:.3g}, {drop['high']:.3g}]: "
+                  f"{'yes' if drop['inside'] else 'NO'}")
     right = inside_drop = inside_recurrence = 0
     held_out = table[table["role"] == "predict"]
     for record_id, row in held_out.iterrows():  # read only now, after the fit
@@ -73,7 +88,7 @@ def main() -> None:
                                    SLIDER_DEFAULTS["members"], SLIDER_DEFAULTS["seed"])
         regime = predicted["regime"]
         right += regime["predicted"] == regime["measured"]
-        line = [f"colas: {record_id}: regime {regime['predicted']} for {regime['measured']}"]
+        line = [f"{tag}: {record_id}: regime {regime['predicted']} for {regime['measured']}"]
         for name in ("drop", "recurrence", "stuck_share"):
             entry = predicted[name]
             line.append(f"{name} {entry['measured']:.3g} in [{entry['low']:.3g}, "
@@ -84,9 +99,8 @@ def main() -> None:
     count = len(held_out)
     for name, value in (("regimes right", right), ("drops inside", inside_drop),
                         ("recurrences inside", inside_recurrence)):
-        print(f"colas: {name} {value} of {count} "
-              f"({check(f'colas: {name}', value, count, at_least=True)})")
-    finish()
+        print(f"{tag}: {name} {value} of {count} "
+              f"({check(f'{tag}: {name}', value, count, at_least=True)})")
 
 
 if __name__ == "__main__":
