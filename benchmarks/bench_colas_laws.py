@@ -38,15 +38,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from bench_colas import _record
 from slipwave.events.stick_slip import FEATURES
-from slipwave.fit.slider import (
-    FEATURE_FLOOR,
-    SliderRecord,
-    law_at,
-    simulated_windows,
-    slider_record,
-)
-from slipwave.io.slider_record import read_slider_record
+from slipwave.fit.slider import FEATURE_FLOOR, SliderRecord, law_at, simulated_windows
 from slipwave.slider_campaign import read_slider_campaign
 from slipwave.solver.rate_state import RateState
 from targets import check, finish
@@ -65,16 +59,6 @@ SECOND_STATE = np.array([[-0.02, 0.02], [-6.0, -3.0]])  # b2, log10 Dc2
 FAMILIES = {"aging": ("aging", False), "slip": ("slip", False),
             "aging, two states": ("aging", True)}
 DROP = FEATURES.index("drop")
-
-
-def _record(row_id: str) -> SliderRecord:
-    row = read_slider_campaign(ROOT / "config" / "colas.tsv").loc[row_id]
-    return slider_record(row_id, read_slider_record(ROOT / str(row["mat"])),
-                         stiffness=float(row["stiffness_n_m"]),
-                         drive_speed=float(row["drive_speed_um_s"]) * 1e-6,
-                         mass=float(row["mass_g"]) * 1e-3,
-                         normal_load=float(row["normal_load_n"]),
-                         window=float(row["window_s"]))
 
 
 def _law(point: np.ndarray, evolution: str) -> RateState:
@@ -108,7 +92,8 @@ def main() -> None:
         print(f"colas laws: {DATA} is not there; nothing measured")
         sys.exit(0)
     seed = int(sys.argv[1]) if len(sys.argv) > 1 else SEED
-    records = tuple(_record(name) for name in RECORDS)
+    table = read_slider_campaign(ROOT / "config" / "colas.tsv")
+    records = tuple(_record(name, table.loc[name]) for name in RECORDS)
     observed = np.array([record.observed[DROP] for record in records])
     error = np.array([record.spread[DROP] / np.sqrt(record.windows) for record in records])
     print("colas laws: measured drops " + ", ".join(

@@ -273,7 +273,7 @@ def simulate_spring_slider(
     ratio = float(steady_friction(law, steady_speed)) if initial_ratio is None else initial_ratio
     # the slider starts at the speed at which the law carries the spring's force
     state = np.concatenate([[ratio], log_state])
-    start_slip = float(slip_rate(law, ratio, log_state if law.dc2 else log_state[0]))
+    start_slip = float(slip_rate(law, ratio, log_state[0] if law.dc2 is None else log_state))
     inertial = bench.mass > 0 and start_slip > _slow(law, start_speed)
     columns, used = [], set()
     for number, (begin, end, drive_speed) in enumerate(pieces):
