@@ -5,10 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from slipwave.events import noise_level, without_spikes
 from slipwave.events.stick_slip import (
     FEATURES,
     REGIMES,
     lowpass,
+    noise_floor,
     regime_of,
     slider_window_features,
 )
@@ -84,3 +86,30 @@ def test_the_low_pass_keeps_the_inertial_oscillation_and_drops_the_noise() -> No
 def test_regimes_follow_the_stuck_share(share: float, regime: str) -> None:
     assert regime_of(share) == regime
     assert list(REGIMES) == ["stick-slip", "mixed", "sliding"]
+
+
+def _quantised_oscillation(noise: float) -> np.ndarray:
+    """An inertial oscillation at 4300 um/s's pace (0.1 at 55 Hz) with white noise, read
+    through a converter whose step is 0.007 (as the Colas record at 2254 N/m)."""
+    time = np.arange(0.0, 4.0, 1 / RATE)
+    ratio = 0.35 + 0.1 * np.sin(2 * np.pi * 55.0 * time)
+    ratio += np.random.default_rng(3).normal(0.0, noise, time.size)
+    return np.round(ratio / 0.007) * 0.007
+
+
+def test_spikes_are_judged_against_their_neighbours_on_a_steep_quantised_record() -> None:
+    ratio = _quantised_oscillation(0.005)
+    ratio[100::200] -= 0.15  # one-sample spikes
+    cleaned = without_spikes(ratio)
+    assert np.all(cleaned[100::200] > ratio[100::200] + 0.1)
+    # the others stay: judged against a window holding them, half were replaced
+    assert np.mean(cleaned != ratio) < 0.01
+
+
+def test_the_noise_floor_is_the_white_noise_the_features_see() -> None:
+    ratio = _quantised_oscillation(0.005)
+    mass = BENCH["stiffness"] / (2 * np.pi * 55.0) ** 2  # the oscillation at the bench's own
+    floor = noise_floor(ratio, RATE, stiffness=BENCH["stiffness"], mass=mass)
+    # the converter's step adds its own 0.007 / sqrt(12)
+    assert floor == pytest.approx(np.hypot(0.005, 0.007 / np.sqrt(12)), rel=0.1)
+    assert noise_level(ratio) > 1.5 * floor  # the first differences read the oscillation

@@ -239,6 +239,17 @@ def test_a_soft_spring_sticks_and_slips() -> None:
     np.testing.assert_allclose(ds.slip, slip)
 
 
+def test_an_integration_past_its_budget_stops_with_the_reason() -> None:
+    law = RateState(a=0.01, b=0.02, dc=1e-6, mu0=0.35)
+    bench = SpringSlider(mass=MASS, stiffness=168.0, drive_speed=42e-6, normal_load=NORMAL_LOAD)
+    run = {"duration": 4.0, "sample_rate": 2000.0, "initial_ratio": 0.33}
+    free = simulate_spring_slider(bench, law, **run)  # type: ignore[arg-type]
+    within = simulate_spring_slider(bench, law, max_evaluations=10**7, **run)  # type: ignore[arg-type]
+    np.testing.assert_array_equal(within.friction_ratio, free.friction_ratio)
+    with pytest.raises(SlipwaveError, match="used its 500 evaluations"):
+        simulate_spring_slider(bench, law, max_evaluations=500, **run)  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize("law", [
     RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35),
     RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, b2=-0.004, dc2=3e-5),

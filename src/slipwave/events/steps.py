@@ -534,9 +534,10 @@ def _line_at(values: np.ndarray, at: int) -> float:
 def without_spikes(values: np.ndarray, max_spike: int = MAX_SPIKE) -> np.ndarray:
     """A signal with its spikes replaced by its running median, at its own rate.
 
-    Only samples further than a robust 5 sigma from the running median of
-    ``2 * max_spike + 1`` samples are replaced (any departure from it, where most
-    samples lie on it and sigma is nothing): the others, kinks included, stay as
+    Only samples further than a robust 5 sigma from the median of their
+    ``2 * max_spike`` neighbours are replaced, by the running median of
+    ``2 * max_spike + 1`` samples (any departure, where most samples lie on their
+    neighbours' median and sigma is nothing): the others, kinks included, stay as
     recorded, so the fits that place onsets are not blurred (where :func:`despike`'s
     block medians lower the rate).
 
@@ -567,12 +568,19 @@ def without_spikes(values: np.ndarray, max_spike: int = MAX_SPIKE) -> np.ndarray
 def _despiked(values: np.ndarray, half: int, mad_to_sigma: float) -> np.ndarray:
     """:func:`without_spikes`, compiled: a fit's members call it for every fall.
 
-    The running median repeats the end samples beyond the ends (as
-    ``scipy.ndimage.median_filter``'s ``"nearest"``), of an odd count: exact.
+    The running medians repeat the end samples beyond the ends (as
+    ``scipy.ndimage.median_filter``'s ``"nearest"``). A sample is judged against the
+    median of its ``2 * half`` neighbours, itself left out: on a steep or quantised
+    stretch a sample is often the median of a window that holds it, and the spread of
+    the departures from that median collapsed to nothing (a Colas record at 1100 um/s
+    had 44 % of its samples replaced); a spike's replacement is the median of the
+    window with it, which leaves a step's edge as it was.
     """
     n = values.size
     median = np.empty(n)
+    around = np.empty(n)
     window = np.empty(2 * half + 1)
+    others = np.empty(2 * half)
     for i in range(n):
         for k in range(-half, half + 1):  # sorted as it is filled (a few samples)
             value = values[min(max(i + k, 0), n - 1)]
@@ -582,7 +590,19 @@ def _despiked(values: np.ndarray, half: int, mad_to_sigma: float) -> np.ndarray:
                 j -= 1
             window[j] = value
         median[i] = window[half]
-    deviation = values - median
+        count = 0
+        for k in range(-half, half + 1):
+            if k == 0:
+                continue
+            value = values[min(max(i + k, 0), n - 1)]
+            j = count
+            while j > 0 and others[j - 1] > value:
+                others[j] = others[j - 1]
+                j -= 1
+            others[j] = value
+            count += 1
+        around[i] = 0.5 * (others[half - 1] + others[half])
+    deviation = values - around
     spread = mad_to_sigma * np.median(np.abs(deviation))
     out = values.copy()
     for i in range(n):

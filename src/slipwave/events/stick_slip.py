@@ -33,7 +33,7 @@ is stuck most of the time, "sliding" when it seldom is, "mixed" between.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
+from scipy.signal import butter, sosfiltfilt, welch
 
 from slipwave.events.steps import load_drops, without_spikes
 
@@ -57,6 +57,9 @@ REGIMES = {"stick-slip": 2 / 3, "mixed": 1 / 3, "sliding": 0.0}
 FEATURES = ("level", "drop", "recurrence", "stuck_share", "creep")
 """The features of a window, in order."""
 
+SPECTRUM_SEGMENT = 1024
+"""Samples per segment of the spectrum :func:`noise_floor` reads (Welch's method)."""
+
 
 def lowpass(ratio: np.ndarray, sample_rate: float, *, stiffness: float, mass: float
             ) -> np.ndarray:
@@ -78,11 +81,72 @@ def lowpass(ratio: np.ndarray, sample_rate: float, *, stiffness: float, mass: fl
     numpy.ndarray
         The filtered record (the input when the corner lies above the Nyquist frequency).
     """
-    corner = LOWPASS_NATURAL_MULTIPLE * np.sqrt(stiffness / mass) / (2 * np.pi)
+    corner = lowpass_corner(stiffness, mass)
     if corner >= 0.5 * sample_rate:
         return np.asarray(ratio, dtype=float)
     sections = butter(LOWPASS_ORDER, corner, fs=sample_rate, output="sos")
     return np.asarray(sosfiltfilt(sections, ratio))
+
+
+def lowpass_corner(stiffness: float, mass: float) -> float:
+    """The low-pass filter's corner: :data:`LOWPASS_NATURAL_MULTIPLE` natural frequencies.
+
+    Parameters
+    ----------
+    stiffness
+        The spring's stiffness, N/m.
+    mass
+        The slider's mass, kg.
+
+    Returns
+    -------
+    float
+        The corner, Hz.
+    """
+    return float(LOWPASS_NATURAL_MULTIPLE * np.sqrt(stiffness / mass) / (2 * np.pi))
+
+
+def noise_floor(ratio: np.ndarray, sample_rate: float, *, stiffness: float, mass: float
+                ) -> float:
+    """The standard deviation of the white noise a record's features see.
+
+    The spectrum's median level above the low-pass corner (:func:`lowpass_corner`), where
+    a spring-slider record holds little but its noise, of the record without its spikes
+    (:func:`slipwave.events.without_spikes`, as the features take them out). Not
+    :func:`slipwave.events.noise_level`: from the first differences, it reads the
+    signal's own changes where the slider oscillates (a Colas record at 4300 um/s: 2.7
+    times this floor) and the converter's step where the noise is about one step.
+
+    Parameters
+    ----------
+    ratio
+        The spring's force over the normal load, sampled at a constant rate.
+    sample_rate
+        Samples per second.
+    stiffness
+        The spring's stiffness, N/m.
+    mass
+        The slider's mass, kg.
+
+    Returns
+    -------
+    float
+        The noise's standard deviation, in the ratio's unit (white noise of variance s^2
+        has the one-sided density 2 s^2 / rate).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.arange(0, 20, 1 / 2000)
+    >>> f = 0.3 + 0.05 * np.sin(2 * np.pi * 40 * t) + rng.normal(0, 0.004, t.size)
+    >>> round(noise_floor(f, 2000.0, stiffness=1000.0, mass=0.03), 4)
+    0.004
+    """
+    values = without_spikes(np.asarray(ratio, dtype=float))
+    frequency, density = welch(values - values.mean(), fs=sample_rate,
+                               nperseg=min(SPECTRUM_SEGMENT, values.size))
+    above = frequency >= min(lowpass_corner(stiffness, mass), 0.5 * frequency[-1])
+    return float(np.sqrt(np.median(density[above]) * sample_rate / 2.0))
 
 
 def regime_of(stuck_share: float) -> str:

@@ -222,6 +222,7 @@ def simulate_spring_slider(
     speed_steps: Sequence[tuple[float, float]] = (),
     initial_ratio: float | None = None,
     initial_log_state: float | Sequence[float] | None = None,
+    max_evaluations: int | None = None,
 ) -> xr.Dataset:
     """Drive a spring-slider and record it at a constant sampling rate.
 
@@ -244,6 +245,10 @@ def simulate_spring_slider(
     initial_log_state
         ln(theta) at time 0 (theta in s; a two-state law's two); the steady state at the
         drive speed by default.
+    max_evaluations
+        Evaluations of the right-hand side allowed over the whole integration (all
+        integrators and stretches together); ``None``: as many as it takes. A search over
+        laws sets it: an integrator can crawl for many minutes on one law.
 
     Returns
     -------
@@ -256,8 +261,9 @@ def simulate_spring_slider(
     Raises
     ------
     SlipwaveError
-        When the bench's numbers are out of range, or when both integrators fail (the
-        message says why and when).
+        When the bench's numbers are out of range, when both integrators fail (the
+        message says why and when), or when the integration needs more than
+        ``max_evaluations``.
     """
     if not (duration > 0 and sample_rate > 0):
         raise SlipwaveError(f"duration and sample rate must be > 0, got {duration}, {sample_rate}")
@@ -276,13 +282,14 @@ def simulate_spring_slider(
     start_slip = float(slip_rate(law, ratio, log_state[0] if law.dc2 is None else log_state))
     inertial = bench.mass > 0 and start_slip > _slow(law, start_speed)
     columns, used = [], set()
+    budget = _Budget(max_evaluations)
     for number, (begin, end, drive_speed) in enumerate(pieces):
         last = number == len(pieces) - 1
         inside = times[(times >= begin) & ((times <= end) if last else (times < end))]
         start, stretch, stalled = begin, inside, 0
         while True:
             state, inertial, reached, rows, method = _integrate(
-                bench, law, drive_speed, state, inertial, start, end, stretch)
+                bench, law, drive_speed, state, inertial, start, end, stretch, budget)
             stalled = stalled + 1 if reached <= start else 0
             if stalled > MAX_STALLED_SWITCHES:
                 raise SlipwaveError(
@@ -304,6 +311,31 @@ def simulate_spring_slider(
     return ds
 
 
+class _OverBudgetError(Exception):
+    """Raised by a counted right-hand side past its budget."""
+
+
+class _Budget:
+    """The right-hand side's evaluations left to an integration (``None``: no limit)."""
+
+    def __init__(self, evaluations: int | None) -> None:
+        self.limit = evaluations
+        self.used = 0
+
+    def counted(self, rhs):  # type: ignore[no-untyped-def]
+        """``rhs``, raising :class:`_OverBudgetError` once the budget is spent."""
+        if self.limit is None:
+            return rhs
+
+        def counted_rhs(t: float, y: np.ndarray) -> np.ndarray:
+            self.used += 1
+            if self.used > self.limit:  # type: ignore[operator]
+                raise _OverBudgetError
+            return rhs(t, y)
+
+        return counted_rhs
+
+
 def _slow(law: RateState, drive_speed: float) -> float:
     """The speed below which the slider's inertia is left out, m/s."""
     return INERTIA_SPEED_FRACTION * (drive_speed if drive_speed > 0 else law.v0)
@@ -311,7 +343,7 @@ def _slow(law: RateState, drive_speed: float) -> float:
 
 def _integrate(bench: SpringSlider, law: RateState, drive_speed: float, state: np.ndarray,
                inertial: bool, begin: float, end: float, samples: np.ndarray,
-               ) -> tuple[np.ndarray, bool, float, np.ndarray, str]:
+               budget: _Budget) -> tuple[np.ndarray, bool, float, np.ndarray, str]:
     """Integrate from ``begin`` until ``end`` or until the slider crosses the slow speed.
 
     Returns the (f, ln theta...) state where it stopped, whether inertia is kept from
@@ -343,9 +375,13 @@ def _integrate(bench: SpringSlider, law: RateState, drive_speed: float, state: n
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # LSODA's complaints: its status says it all
-                solution = solve_ivp(rhs, (begin, end), start, method=method, jac=jacobian,
-                                     t_eval=evaluated, events=events,
+                solution = solve_ivp(budget.counted(rhs), (begin, end), start, method=method,
+                                     jac=jacobian, t_eval=evaluated, events=events,
                                      rtol=RELATIVE_TOLERANCE, atol=tolerance)
+        except _OverBudgetError:
+            raise SlipwaveError(f"the spring-slider's integration used its {budget.limit} "
+                                f"evaluations in the stretch from t = {begin:.6g} s ({method})"
+                                ) from None
         except ValueError as error:  # the event's root lost between a step's two ends
             failures.append(f"{method}: {error}")
             continue
