@@ -98,3 +98,20 @@ def test_a_two_state_posterior_keeps_its_second_state() -> None:
     assert box[4, 0] <= interval["b2"][1] <= interval["b2"][0] <= interval["b2"][2] <= box[4, 1]
     assert 10 ** box[5, 0] <= interval["dc2"][1] < interval["dc2"][2] <= 10 ** box[5, 1]
     assert slider._inside(samples).all() and not slider._inside(samples[:, :4] * 10).any()
+
+
+def test_a_two_state_search_starts_where_the_one_state_fit_ended(
+        record: slider.SliderRecord) -> None:
+    points = TRUTH + np.random.default_rng(4).normal(0.0, 1e-3, (10, 4))
+    logliks = -np.arange(10.0)[::-1]  # the last four the best
+    one_state = slider.SliderPosterior(points, points, logliks, ("virtual",))
+    start = slider.nested_start(one_state)
+    assert start.shape == (slider.NESTED_START_GUESSES, 6)
+    np.testing.assert_array_equal(start[:, :4], points[-4:])
+    assert (start[:, 4] == 0.0).all() and slider._inside(start).all()
+    # with b2 = 0 the two-state law is the one-state law: the same likelihood, but for the
+    # integrator's steps over one more variable
+    assert slider.loglik([record], start[-1], members=3, seed=2) == pytest.approx(
+        slider.loglik([record], points[-1], members=3, seed=2), abs=0.01)
+    with pytest.raises(SlipwaveError, match="starts from a one-state fit"):
+        slider.nested_start(slider.SliderPosterior(start, start, np.zeros(4), ("x",)))

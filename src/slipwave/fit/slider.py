@@ -493,7 +493,8 @@ class SliderPosterior:
 
 
 def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
-                progress: Callable[[str], None] | None = None) -> SliderPosterior:
+                progress: Callable[[str], None] | None = None,
+                start: np.ndarray | None = None) -> SliderPosterior:
     """The posterior of (a, b - a, log10 Dc, mu0[, b2, log10 Dc2]) given records fitted jointly.
 
     Parameters
@@ -504,6 +505,11 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
         The search's settings.
     progress
         Called with a line after each round of guesses.
+    start
+        Guesses evaluated with the design (rows of the search's coordinates; those outside
+        the prior are left out): a one-state fit's best guesses with an idle second state
+        (:func:`nested_start`), from which a two-state search starts where the nested law
+        already fits.
 
     Returns
     -------
@@ -518,6 +524,9 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
     with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
           else contextlib.nullcontext()) as pool:
         points = _prior_draws(settings.design * dimensions, settings.seed, settings.states)
+        if start is not None:
+            start = np.atleast_2d(np.asarray(start, dtype=float))
+            points = np.vstack([start[_inside(start)], points])
         logliks = _evaluate(records, points, settings, pool)
         say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
         for round_ in range(0, settings.acquisitions * dimensions, ACQUISITION_BATCH):
@@ -537,6 +546,41 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
                                seed=settings.seed)
     return SliderPosterior(samples, points, logliks, tuple(r.name for r in records),
                            settings.evolution)
+
+
+NESTED_START_GUESSES = 4
+"""A one-state fit's best guesses a two-state search starts from (:func:`nested_start`)."""
+
+
+def nested_start(posterior: SliderPosterior) -> np.ndarray:
+    """A one-state fit's best guesses as two-state guesses with an idle second state.
+
+    With b2 = 0 the two-state law is the one-state law (Dc2 then changes nothing; it is
+    set to the middle of its prior), so the two-state search starts at the likelihood the
+    one-state fit reached rather than looking for that basin again in six dimensions.
+
+    Parameters
+    ----------
+    posterior
+        A one-state fit.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (:data:`NESTED_START_GUESSES`, 6).
+
+    Raises
+    ------
+    SlipwaveError
+        If the fit is not a one-state fit.
+    """
+    if posterior.states != 1:
+        raise SlipwaveError(f"a two-state search starts from a one-state fit, not a "
+                            f"{posterior.states}-state one")
+    finite = np.isfinite(posterior.logliks)
+    best = posterior.points[finite][np.argsort(posterior.logliks[finite])[-NESTED_START_GUESSES:]]
+    idle = np.array([0.0, SECOND_STATE_BOX[1].mean()])
+    return np.hstack([best, np.tile(idle, (best.shape[0], 1))])
 
 
 def predict_record(record: SliderRecord, posterior: SliderPosterior, draws: int,
