@@ -7,7 +7,8 @@ two-state search starting from the one-state fit's best guesses, its second stat
 three records at 2254 N/m are read only to be compared with each law's posterior
 predictive, after the fits. Targets, for each law: each held-out record's regime
 predicted right and its median drop and recurrence inside the predictive's 95 %
-interval (issue 36).
+interval (issue 36). Writes the one-state law's predictions of the nine records as
+docs/_static/colas_predictions.png.
 Run: python benchmarks/bench_colas.py (needs ../shared/data/colas2019)
 """
 
@@ -21,6 +22,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -37,10 +39,12 @@ from slipwave.fit.slider import (
 )
 from slipwave.io.slider_record import read_slider_record
 from slipwave.slider_campaign import read_slider_campaign
+from slipwave.slider_report import plot_predictions
 from targets import check, finish
 
 ROOT = Path(__file__).parents[1]
 DATA = ROOT.parent / "shared" / "data" / "colas2019"
+FIGURE = ROOT / "docs" / "_static" / "colas_predictions.png"
 
 
 def _record(row_id: str, row: pd.Series) -> SliderRecord:
@@ -66,6 +70,36 @@ def main() -> None:
     finish()
 
 
+def _line(predicted: dict[str, Any]) -> str:
+    """A record's predicted regime and features against the measured ones, on one line."""
+    regime = predicted["regime"]
+    parts = [f"{predicted['record']}: regime {regime['predicted']} for {regime['measured']}"]
+    for name in ("drop", "recurrence", "stuck_share"):
+        entry = predicted[name]
+        parts.append(f"{name} {entry['measured']:.3g} in [{entry['low']:.3g}, "
+                     f"{entry['high']:.3g}]: {'yes' if entry['inside'] else 'NO'}")
+    return "; ".join(parts)
+
+
+def _predictions(table: pd.DataFrame, fitted: list[SliderRecord], posterior: SliderPosterior,
+                 tag: str) -> list[dict[str, Any]]:
+    """Every record's posterior predictive: the fitted ones, then the held-out ones (read
+    only here, after the fit), each printed as it comes."""
+    predictions = []
+    for record in fitted:  # in-sample: does the law reproduce what it was fitted to?
+        predicted = predict_record(record, posterior, SLIDER_DEFAULTS["draws"],
+                                   SLIDER_DEFAULTS["members"], SLIDER_DEFAULTS["seed"])
+        predictions.append({**predicted, "role": "fit"})
+        print(f"{tag}: fitted {_line(predicted)}", flush=True)
+    for record_id, row in table[table["role"] == "predict"].iterrows():
+        predicted = predict_record(_record(str(record_id), row), posterior,
+                                   SLIDER_DEFAULTS["draws"], SLIDER_DEFAULTS["members"],
+                                   SLIDER_DEFAULTS["seed"])
+        predictions.append({**predicted, "role": "predict"})
+        print(f"{tag}: held out {_line(predicted)}", flush=True)
+    return predictions
+
+
 def _fit_and_predict(table: pd.DataFrame, fitted: list[SliderRecord], states: int,
                      start: np.ndarray | None) -> SliderPosterior:
     tag = f"colas ({states} state{'s' if states > 1 else ''})"
@@ -78,34 +112,17 @@ def _fit_and_predict(table: pd.DataFrame, fitted: list[SliderRecord], states: in
           f"({len(posterior.points)} guesses)")
     for name, (middle, low, high) in posterior.interval().items():
         print(f"{tag}: {name} {middle:.4g} [{low:.4g}, {high:.4g}]")
-    for record in fitted:  # in-sample: does the law order the drops with the stiffness?
-        if record.drive_speed < 1e-4:
-            drop = predict_record(record, posterior, SLIDER_DEFAULTS["draws"],
-                                  SLIDER_DEFAULTS["members"], SLIDER_DEFAULTS["seed"])["drop"]
-            print(f"{tag}: fitted {record.name}: drop {drop['measured']:.3g} in "
-                  f"[{drop['low']:.3g}, {drop['high']:.3g}]: "
-                  f"{'yes' if drop['inside'] else 'NO'}")
-    right = inside_drop = inside_recurrence = 0
-    held_out = table[table["role"] == "predict"]
-    for record_id, row in held_out.iterrows():  # read only now, after the fit
-        record = _record(str(record_id), row)
-        predicted = predict_record(record, posterior, SLIDER_DEFAULTS["draws"],
-                                   SLIDER_DEFAULTS["members"], SLIDER_DEFAULTS["seed"])
-        regime = predicted["regime"]
-        right += regime["predicted"] == regime["measured"]
-        line = [f"{tag}: {record_id}: regime {regime['predicted']} for {regime['measured']}"]
-        for name in ("drop", "recurrence", "stuck_share"):
-            entry = predicted[name]
-            line.append(f"{name} {entry['measured']:.3g} in [{entry['low']:.3g}, "
-                        f"{entry['high']:.3g}]: {'yes' if entry['inside'] else 'NO'}")
-        inside_drop += predicted["drop"]["inside"]
-        inside_recurrence += predicted["recurrence"]["inside"]
-        print("; ".join(line))
-    count = len(held_out)
-    for name, value in (("regimes right", right), ("drops inside", inside_drop),
-                        ("recurrences inside", inside_recurrence)):
-        print(f"{tag}: {name} {value} of {count} "
-              f"({check(f'{tag}: {name}', value, count, at_least=True)})")
+    predictions = _predictions(table, fitted, posterior, tag)
+    if states == 1:  # the methods page's figure
+        plot_predictions(predictions).savefig(FIGURE, dpi=100)
+    held_out = [p for p in predictions if p["role"] == "predict"]
+    counts = {"regimes right": sum(p["regime"]["predicted"] == p["regime"]["measured"]
+                                   for p in held_out),
+              "drops inside": sum(p["drop"]["inside"] for p in held_out),
+              "recurrences inside": sum(p["recurrence"]["inside"] for p in held_out)}
+    for name, value in counts.items():
+        print(f"{tag}: {name} {value} of {len(held_out)} "
+              f"({check(f'{tag}: {name}', value, len(held_out), at_least=True)})")
     return posterior
 
 
