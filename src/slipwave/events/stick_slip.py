@@ -114,8 +114,9 @@ def noise_floor(ratio: np.ndarray, sample_rate: float, *, stiffness: float, mass
     a spring-slider record holds little but its noise, of the record without its spikes
     (:func:`slipwave.events.without_spikes`, as the features take them out). Not
     :func:`slipwave.events.noise_level`: from the first differences, it reads the
-    signal's own changes where the slider oscillates (a Colas record at 4300 um/s: 2.7
-    times this floor) and the converter's step where the noise is about one step.
+    signal's own changes where the slider oscillates (the Colas records at 4300 um/s: 1.7
+    times this floor) and the converter's step where the noise is about one step (the
+    other Colas records: 0.83 times it).
 
     Parameters
     ----------
