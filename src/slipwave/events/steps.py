@@ -580,7 +580,6 @@ def _despiked(values: np.ndarray, half: int, mad_to_sigma: float) -> np.ndarray:
     median = np.empty(n)
     around = np.empty(n)
     window = np.empty(2 * half + 1)
-    others = np.empty(2 * half)
     for i in range(n):
         for k in range(-half, half + 1):  # sorted as it is filled (a few samples)
             value = values[min(max(i + k, 0), n - 1)]
@@ -590,18 +589,13 @@ def _despiked(values: np.ndarray, half: int, mad_to_sigma: float) -> np.ndarray:
                 j -= 1
             window[j] = value
         median[i] = window[half]
-        count = 0
-        for k in range(-half, half + 1):
-            if k == 0:
-                continue
-            value = values[min(max(i + k, 0), n - 1)]
-            j = count
-            while j > 0 and others[j - 1] > value:
-                others[j] = others[j - 1]
-                j -= 1
-            others[j] = value
-            count += 1
-        around[i] = 0.5 * (others[half - 1] + others[half])
+        # the neighbours' median: the sorted window's middle pair once the sample is out
+        if values[i] < window[half]:
+            around[i] = 0.5 * (window[half] + window[half + 1])
+        elif values[i] > window[half]:
+            around[i] = 0.5 * (window[half - 1] + window[half])
+        else:
+            around[i] = 0.5 * (window[half - 1] + window[half + 1])
     deviation = values - around
     spread = mad_to_sigma * np.median(np.abs(deviation))
     out = values.copy()

@@ -206,6 +206,7 @@ def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_spee
     bench = SpringSlider(mass=mass, stiffness=stiffness, drive_speed=drive_speed,
                          normal_load=normal_load)
     time, ratio = record.time.values, record.friction_ratio.values
+    rate = 1.0 / float(time[1] - time[0])
     vectors = window_vectors(time, ratio, bench, window)
     whole = slider_window_features(time, ratio, stiffness=stiffness, drive_speed=drive_speed,
                                    normal_load=normal_load, mass=mass)
@@ -213,9 +214,7 @@ def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_spee
                         tuple(vectors.mean(axis=0)), vectors.shape[0],
                         tuple(vectors.std(axis=0, ddof=1) if len(vectors) > 1
                               else np.zeros(vectors.shape[1])),
-                        noise_floor(ratio, 1.0 / float(time[1] - time[0]),
-                                    stiffness=stiffness, mass=mass),
-                        1.0 / float(time[1] - time[0]),
+                        noise_floor(ratio, rate, stiffness=stiffness, mass=mass), rate,
                         regime_of(whole["stuck_share"]))
 
 
