@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -115,3 +117,36 @@ def test_a_two_state_search_starts_where_the_one_state_fit_ended(
         slider.loglik([record], points[-1], members=3, seed=2), abs=0.01)
     with pytest.raises(SlipwaveError, match="starts from a one-state fit"):
         slider.nested_start(slider.SliderPosterior(start, start, np.zeros(4), ("x",)))
+
+
+def test_a_cutoff_law_is_searched_kept_and_started_from_one_state(
+        record: slider.SliderRecord, tmp_path: Path) -> None:
+    assert slider.parameters(1, cutoff=True)[-1] == "log10_vc"
+    assert slider.law_shape(5) == (1, True) and slider.law_shape(7) == (2, True)
+    law = slider.law_at(np.array([0.01, 0.005, -6.0, 0.35, -3.0]))
+    assert law.cutoff_speed == pytest.approx(1e-3) and law.dc2 is None
+    box = slider.prior_box(1, cutoff=True)
+    samples = box[:, 0] + np.random.default_rng(5).random((40, 5)) * np.diff(box, axis=1)[:, 0]
+    samples[:, 1] = np.abs(samples[:, 1])
+    posterior = slider.SliderPosterior(samples, samples[:6], np.zeros(6), ("x",))
+    slider.posterior_dataset(posterior, slider.SliderFitSettings(cutoff=True), 1.0).to_netcdf(
+        tmp_path / "posterior.nc")
+    back = slider.posterior_of(xr.load_dataset(tmp_path / "posterior.nc"))
+    assert back.cutoff and back.states == 1
+    low, high = 10.0 ** box[4]
+    assert low <= back.interval()["cutoff_speed"][1] < back.interval()["cutoff_speed"][2] <= high
+    # started from a one-state fit at the prior's top speed, the cut-off changes the
+    # likelihood by little (b's effect lowered by under 1 % in this record's slips)
+    points = TRUTH + np.random.default_rng(4).normal(0.0, 1e-3, (10, 4))
+    one_state = slider.SliderPosterior(points, points, -np.arange(10.0)[::-1], ("virtual",))
+    start = slider.nested_start(one_state, states=1, cutoff=True)
+    assert start.shape == (slider.NESTED_START_GUESSES, 5) and slider._inside(start).all()
+    nested = slider.loglik([record], start[-1], members=3, seed=2)
+    plain = slider.loglik([record], points[-1], members=3, seed=2)
+    assert nested == pytest.approx(plain, abs=0.5)
+    # a cut-off at the slowest bound leaves no stick-slip: far less likely
+    slow = start[-1].copy()
+    slow[4] = box[4, 0]
+    assert slider.loglik([record], slow, members=3, seed=2) < plain - 10.0
+    with pytest.raises(SlipwaveError, match="nothing to nest"):
+        slider.nested_start(one_state, states=1, cutoff=False)

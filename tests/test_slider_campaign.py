@@ -57,6 +57,6 @@ def test_a_missing_table_is_named(tmp_path: Path) -> None:
 
 
 def test_the_fit_options_are_the_settings() -> None:
-    assert slider_fit_options({**SLIDER_DEFAULTS, "evolution": "aging"}) == (
+    assert slider_fit_options({**SLIDER_DEFAULTS, "evolution": "aging", "cutoff": False}) == (
         "--states 1 --members 4 --design 8 --acquisitions 24 --exploration 2.0 --samples 2000 "
-        "--seed 0 --evolution aging")
+        "--seed 0 --evolution aging --no-cutoff")

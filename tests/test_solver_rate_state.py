@@ -189,8 +189,11 @@ def _linear_modes(stiffness: float, law: RateState, mass: float, speed: float) -
     (M/N) Dc s^3 + (M V / N + a Dc / V) s^2 + (a - b + K Dc / N) s + K V / N = 0.
     """
     m, k = mass / NORMAL_LOAD, stiffness / NORMAL_LOAD
+    # with a cut-off, psi's derivative in ln(theta) at the steady state: b vc / (vc + V)
+    effect = law.b if law.cutoff_speed is None else (
+        law.b * law.cutoff_speed / (law.cutoff_speed + speed))
     return np.roots([m * law.dc, m * speed + law.a * law.dc / speed,
-                     law.a - law.b + k * law.dc, k * speed])
+                     law.a - effect + k * law.dc, k * speed])
 
 
 def _oscillation_growth(stiffness: float, law: RateState, mass: float, speed: float) -> float:
@@ -220,6 +223,40 @@ def test_steady_sliding_loses_stability_at_the_critical_stiffness(
     assert max(_linear_modes(1.001 * critical, law, mass, speed).real) < 0
     assert _oscillation_growth(0.9 * critical, law, mass, speed) > 3.0
     assert _oscillation_growth(1.1 * critical, law, mass, speed) < 1 / 3.0
+
+
+@pytest.mark.parametrize(("mass", "speed"), [(0.0, 1e-5), (MASS, 3.1e-4)])
+def test_a_cutoff_moves_the_critical_stiffness_where_the_simulation_sees_it(
+        mass: float, speed: float) -> None:
+    # the cut-off at 0.3 mm/s takes 3 % of b's effect at 10 um/s and half at 0.31 mm/s
+    law = RateState(a=0.01, b=0.03, dc=1e-6, mu0=0.4, cutoff_speed=3e-4)
+    critical = critical_stiffness(law, NORMAL_LOAD, mass=mass, drive_speed=speed)
+    uncut = critical_stiffness(RateState(a=0.01, b=0.03, dc=1e-6, mu0=0.4), NORMAL_LOAD,
+                               mass=mass, drive_speed=speed)
+    assert critical < 0.97 * uncut
+    assert _oscillation_growth(0.9 * critical, law, mass, speed) > 3.0
+    assert _oscillation_growth(1.1 * critical, law, mass, speed) < 1 / 3.0
+
+
+def test_a_cutoff_spends_the_state_effect_above_its_speed() -> None:
+    cut = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.4, cutoff_speed=1e-3)
+    uncut = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.4)
+    far = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.4, cutoff_speed=1e6)
+    speed, log_state = np.geomspace(1e-9, 1.0, 7), np.linspace(-8.0, 6.0, 7)
+    # a cut-off far above every speed is no cut-off
+    np.testing.assert_allclose(friction(far, speed, log_state),
+                               friction(uncut, speed, log_state), rtol=1e-9)
+    # the law and its inverse agree with a cut-off
+    mu = friction(cut, speed, log_state)
+    np.testing.assert_allclose(slip_rate(cut, mu, log_state), speed, rtol=1e-9)
+    # steady friction's slope in ln(v): a - b well below vc, a well above it
+    def slope(v: float) -> float:
+        return float(np.diff(steady_friction(cut, [v, v * 1.01]))[0] / np.log(1.01))
+    assert slope(1e-7) == pytest.approx(0.01 - 0.015, rel=1e-3)
+    assert slope(1.0) == pytest.approx(0.01, rel=2e-3)
+    assert slope(1e-3) == pytest.approx(0.01 - 0.015 / 2, rel=1e-2)
+    with pytest.raises(SlipwaveError, match="cut-off speed"):
+        RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.4, cutoff_speed=0.0)
 
 
 def test_a_soft_spring_sticks_and_slips() -> None:
@@ -254,6 +291,8 @@ def test_an_integration_past_its_budget_stops_with_the_reason() -> None:
     RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35),
     RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, b2=-0.004, dc2=3e-5),
     RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, b2=0.003, dc2=3e-5, evolution="slip"),
+    RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, cutoff_speed=1e-4),
+    RateState(a=0.006, b=0.009, dc=3e-7, mu0=0.35, b2=-0.004, dc2=3e-5, cutoff_speed=1e-3),
 ])
 def test_the_inertial_jacobian_is_the_right_hand_side_s(law: RateState) -> None:
     """The analytic Jacobian against central differences, in a stick and in a slip."""

@@ -724,7 +724,8 @@ def _slider_fit(args: argparse.Namespace) -> None:
     settings = SliderFitSettings(members=args.members, design=args.design,
                                  acquisitions=args.acquisitions, exploration=args.exploration,
                                  samples=args.samples, processes=args.processes, seed=args.seed,
-                                 evolution=args.evolution, states=args.states)
+                                 evolution=args.evolution, states=args.states,
+                                 cutoff=args.cutoff)
     posterior = fit_records(records, settings, progress=print)
     seconds = clock.perf_counter() - started
     dataset = posterior_dataset(posterior, settings, seconds)
@@ -1206,7 +1207,8 @@ def build_parser() -> argparse.ArgumentParser:
     slider_fit = commands.add_parser(
         "slider-fit", help="fit rate-and-state friction to spring-slider records jointly",
         description="Fit a, b - a, log10 Dc and mu0 of rate-and-state friction (--evolution; "
-        "and b2, log10 Dc2 of a second state with --states 2) "
+        "and b2, log10 Dc2 of a second state with --states 2, log10 vc of a cut-off speed "
+        "with --cutoff) "
         "to the records given, all at once, by a synthetic likelihood over their windows' "
         "features and a Gaussian-process search (slipwave.fit.slider).")
     slider_fit.add_argument("records", type=_input, nargs="+",
@@ -1224,6 +1226,9 @@ def build_parser() -> argparse.ArgumentParser:
     slider_fit.add_argument("--evolution", choices=["aging", "slip"],
                             default=default.SLIDER_EVOLUTION,
                             help="the state's evolution law fitted (%(default)s)")
+    slider_fit.add_argument(
+        "--cutoff", action=argparse.BooleanOptionalAction, default=default.SLIDER_CUTOFF,
+        help=default.setting_schema("sliders", "cutoff")["description"] + " (%(default)s)")
     slider_fit.add_argument("--processes", type=_positive_int, default=1,
                             help="worker processes for the guesses (%(default)s)")
     slider_fit.set_defaults(run=_slider_fit)

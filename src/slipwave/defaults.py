@@ -149,3 +149,5 @@ SLIDER_DEFAULTS: dict[str, Any] = {key: _setting("sliders", key) for key in SLID
 """Their defaults."""
 SLIDER_EVOLUTION: str = _setting("sliders", "evolution")
 """The state's evolution law the spring-slider fit uses by default."""
+SLIDER_CUTOFF: bool = _setting("sliders", "cutoff")
+"""Whether the spring-slider fit's law has a cut-off speed by default."""

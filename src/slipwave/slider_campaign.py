@@ -118,4 +118,5 @@ def slider_fit_options(settings: Mapping[str, Any]) -> str:
         One option per setting the command takes.
     """
     return " ".join([f"--{key} {settings[key]!r}" for key in SLIDER_TUNABLES if key != "draws"]
-                    + [f"--evolution {settings['evolution']}"])
+                    + [f"--evolution {settings['evolution']}",
+                       "--cutoff" if settings["cutoff"] else "--no-cutoff"])

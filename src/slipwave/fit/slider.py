@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import multivariate_normal, qmc
 
-from slipwave.defaults import SLIDER_DEFAULTS, SLIDER_EVOLUTION
+from slipwave.defaults import SLIDER_CUTOFF, SLIDER_DEFAULTS, SLIDER_EVOLUTION
 from slipwave.errors import SlipwaveError
 from slipwave.events.stick_slip import (
     FEATURES,
@@ -56,10 +56,19 @@ strengthening (negative) to strongly weakening; Dc: 0.1 to 30 um, the size of th
 contacts between asperities or paper fibres; mu0: paper on paper's friction, 0.15 to 0.6
 (the Colas records' median levels lie at 0.29-0.51)."""
 
+CUTOFF_PARAMETERS = ("log10_vc",)
+"""A cut-off law's further coordinate: log10 of the cut-off speed vc in m/s."""
+
 SECOND_STATE_BOX = np.array([[-0.02, 0.02], [-6.0, -3.0]])
 """A second state's bounds: b2 of either sign, as large as b (negative, it strengthens
 the interface as it renews: Blanpied and Tullis 1986); Dc2 from 1 um, above the first
 state's lengths that matter, to 1 mm, the longest slip of a Colas record."""
+
+CUTOFF_BOX = np.array([[-4.5, 0.0]])
+"""The cut-off speed's bounds: from 30 um/s, below the slowest drive (42 um/s), where
+steady sliding would strengthen at every drive speed, to 1 m/s, above the fastest slips
+of a Colas record (mm/s to cm/s), where the cut-off changes nothing (b's effect lowered by
+at most 1 % at 1 cm/s)."""
 
 REFERENCE_SCATTER = 0.08
 """The scatter of the reference friction from one record to the next (standard deviation
@@ -218,36 +227,68 @@ def slider_record(name: str, record: xr.Dataset, *, stiffness: float, drive_spee
                         regime_of(whole["stuck_share"]))
 
 
-def parameters(states: int) -> tuple[str, ...]:
-    """The search's coordinates for a law of one or two states.
+def parameters(states: int, cutoff: bool = False) -> tuple[str, ...]:
+    """The search's coordinates for a law of one or two states, with or without a cut-off.
 
     Parameters
     ----------
     states
         State variables, 1 or 2.
+    cutoff
+        Whether the law has a cut-off speed.
 
     Returns
     -------
     tuple of str
-        :data:`PARAMETERS`, then :data:`SECOND_STATE_PARAMETERS` with two states.
+        :data:`PARAMETERS`, then :data:`SECOND_STATE_PARAMETERS` with two states, then
+        :data:`CUTOFF_PARAMETERS` with a cut-off.
     """
-    return PARAMETERS + (SECOND_STATE_PARAMETERS if states == 2 else ())
+    return (PARAMETERS + (SECOND_STATE_PARAMETERS if states == 2 else ())
+            + (CUTOFF_PARAMETERS if cutoff else ()))
 
 
-def prior_box(states: int) -> np.ndarray:
-    """The uniform prior's bounds for a law of one or two states.
+def prior_box(states: int, cutoff: bool = False) -> np.ndarray:
+    """The uniform prior's bounds for a law of one or two states, with or without a cut-off.
 
     Parameters
     ----------
     states
         State variables, 1 or 2.
+    cutoff
+        Whether the law has a cut-off speed.
 
     Returns
     -------
     numpy.ndarray
         One row (low, high) per coordinate of :func:`parameters`.
     """
-    return np.vstack([PRIOR_BOX, SECOND_STATE_BOX]) if states == 2 else PRIOR_BOX
+    return np.vstack([PRIOR_BOX] + ([SECOND_STATE_BOX] if states == 2 else [])
+                     + ([CUTOFF_BOX] if cutoff else []))
+
+
+def law_shape(coordinates: int) -> tuple[int, bool]:
+    """The states and the cut-off of a law from its number of coordinates.
+
+    Parameters
+    ----------
+    coordinates
+        The length of a point of the search (:func:`parameters`).
+
+    Returns
+    -------
+    tuple
+        (states, cutoff).
+
+    Raises
+    ------
+    SlipwaveError
+        For a number no law has.
+    """
+    for states in (1, 2):
+        for cutoff in (False, True):
+            if len(parameters(states, cutoff)) == coordinates:
+                return states, cutoff
+    raise SlipwaveError(f"no spring-slider law has {coordinates} coordinates")
 
 
 def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
@@ -256,7 +297,8 @@ def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
     Parameters
     ----------
     point
-        (a, b - a, log10 Dc, mu0), then (b2, log10 Dc2) for a two-state law.
+        (a, b - a, log10 Dc, mu0), then (b2, log10 Dc2) for a two-state law, then
+        log10 vc for a law with a cut-off.
     evolution
         The state's evolution law, ``"aging"`` or ``"slip"``.
 
@@ -265,10 +307,12 @@ def law_at(point: np.ndarray, evolution: str = SLIDER_EVOLUTION) -> RateState:
     RateState
         The law there (v0 1 um/s).
     """
+    states, cutoff = law_shape(len(point))
     a, excess, log_dc, mu0 = (float(value) for value in point[:4])
-    second = {"b2": float(point[4]), "dc2": 10.0 ** float(point[5])} if len(point) > 4 else {}
+    second = {"b2": float(point[4]), "dc2": 10.0 ** float(point[5])} if states == 2 else {}
+    speed = {"cutoff_speed": 10.0 ** float(point[-1])} if cutoff else {}
     return RateState(a=a, b=a + excess, dc=10.0**log_dc, mu0=mu0,
-                     evolution=evolution, **second)  # type: ignore[arg-type]
+                     evolution=evolution, **second, **speed)  # type: ignore[arg-type]
 
 
 def simulated_windows(record: SliderRecord, law: RateState, members: int, seed: int
@@ -358,6 +402,8 @@ class SliderFitSettings:
         The fit's seed.
     evolution
         The state's evolution law fitted.
+    cutoff
+        Whether the law fitted has a cut-off speed.
 
     """
 
@@ -370,6 +416,7 @@ class SliderFitSettings:
     processes: int = 1
     seed: int = SLIDER_DEFAULTS["seed"]
     evolution: str = SLIDER_EVOLUTION
+    cutoff: bool = SLIDER_CUTOFF
 
 
 def loglik(records: Sequence[SliderRecord], point: np.ndarray, members: int,
@@ -417,14 +464,15 @@ def _loglik_job(job: tuple[Sequence[SliderRecord], np.ndarray, int, int, str]) -
 def _inside(points: np.ndarray) -> np.ndarray:
     """Whether points lie in the prior: its box, and b = a + (b - a) >= 0."""
     points = np.atleast_2d(points)
-    box = prior_box(1 if points.shape[1] == len(PARAMETERS) else 2)
+    box = prior_box(*law_shape(points.shape[1]))
     return (np.all((points >= box[:, 0]) & (points <= box[:, 1]), axis=1)
             & (points[:, 0] + points[:, 1] >= 0.0))
 
 
-def _prior_draws(count: int, rng: np.random.Generator | int, states: int) -> np.ndarray:
+def _prior_draws(count: int, rng: np.random.Generator | int, states: int, cutoff: bool
+                 ) -> np.ndarray:
     """``count`` Latin hypercube points of the box that lie in the prior (of 4 count drawn)."""
-    box = prior_box(states)
+    box = prior_box(states, cutoff)
     sampler = qmc.LatinHypercube(d=box.shape[0], seed=rng)
     points = qmc.scale(sampler.random(4 * count), box[:, 0], box[:, 1])
     return points[_inside(points)][:count]
@@ -462,7 +510,18 @@ class SliderPosterior:
         int
             1 or 2.
         """
-        return 1 if self.samples.shape[1] == len(PARAMETERS) else 2
+        return law_shape(self.samples.shape[1])[0]
+
+    @property
+    def cutoff(self) -> bool:
+        """Whether the law fitted has a cut-off speed (from the coordinates' number).
+
+        Returns
+        -------
+        bool
+            True with a cut-off.
+        """
+        return law_shape(self.samples.shape[1])[1]
 
     def interval(self, probability: float = 0.95) -> dict[str, tuple[float, float, float]]:
         """Each parameter's median and central interval (b and Dc in their own units).
@@ -475,8 +534,9 @@ class SliderPosterior:
         Returns
         -------
         dict
-            ``a``, ``b``, ``dc`` (m), ``mu0``, ``b_minus_a``, and ``b2``, ``dc2`` (m) for a
-            two-state law: (median, low, high).
+            ``a``, ``b``, ``dc`` (m), ``mu0``, ``b_minus_a``, ``b2`` and ``dc2`` (m) for a
+            two-state law, ``cutoff_speed`` (m/s) for a law with a cut-off: (median, low,
+            high).
         """
         tail = 50.0 * (1.0 - probability)
         values = {"a": self.samples[:, 0], "b": self.samples[:, 0] + self.samples[:, 1],
@@ -484,6 +544,8 @@ class SliderPosterior:
                   "mu0": self.samples[:, 3]}
         if self.states == 2:
             values |= {"b2": self.samples[:, 4], "dc2": 10.0 ** self.samples[:, 5]}
+        if self.cutoff:
+            values |= {"cutoff_speed": 10.0 ** self.samples[:, -1]}
         out = {}
         for name, v in values.items():
             middle, low, high = np.percentile(v, [50.0, tail, 100.0 - tail])
@@ -494,7 +556,7 @@ class SliderPosterior:
 def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
                 progress: Callable[[str], None] | None = None,
                 start: np.ndarray | None = None) -> SliderPosterior:
-    """The posterior of (a, b - a, log10 Dc, mu0[, b2, log10 Dc2]) given records fitted jointly.
+    """The posterior of (a, b - a, log10 Dc, mu0[, b2, log10 Dc2][, log10 vc]) given records.
 
     Parameters
     ----------
@@ -515,14 +577,15 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
     SliderPosterior
         The posterior samples and the guesses.
     """
-    box = prior_box(settings.states)
+    box = prior_box(settings.states, settings.cutoff)
     dimensions = box.shape[0]
     say = progress or (lambda _: None)
     rng = np.random.default_rng(settings.seed)
     # one pool for the whole search: its workers import slipwave once
     with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
           else contextlib.nullcontext()) as pool:
-        points = _prior_draws(settings.design * dimensions, settings.seed, settings.states)
+        points = _prior_draws(settings.design * dimensions, settings.seed, settings.states,
+                              settings.cutoff)
         if start is not None:
             start = np.atleast_2d(np.asarray(start, dtype=float))
             points = np.vstack([start[_inside(start)], points])
@@ -531,7 +594,7 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
         for round_ in range(0, settings.acquisitions * dimensions, ACQUISITION_BATCH):
             finite = np.isfinite(logliks)
             process = surrogate(points[finite], logliks[finite], box, settings.seed + round_)
-            candidates = _prior_draws(4000, rng, settings.states)
+            candidates = _prior_draws(4000, rng, settings.states, settings.cutoff)
             upper = process.upper(candidates, settings.exploration)
             chosen = candidates[np.argsort(upper)[-ACQUISITION_BATCH:]]
             points = np.vstack([points, chosen])
@@ -548,37 +611,47 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
 
 
 NESTED_START_GUESSES = 4
-"""A one-state fit's best guesses a two-state search starts from (:func:`nested_start`)."""
+"""A one-state fit's best guesses a wider law's search starts from (:func:`nested_start`)."""
 
 
-def nested_start(posterior: SliderPosterior) -> np.ndarray:
-    """A one-state fit's best guesses as two-state guesses with an idle second state.
+def nested_start(posterior: SliderPosterior, states: int = 2, cutoff: bool = False
+                 ) -> np.ndarray:
+    """A one-state fit's best guesses as guesses of a wider law that leave it as it was.
 
-    With b2 = 0 the two-state law is the one-state law (Dc2 then changes nothing; it is
-    set to the middle of its prior), so the two-state search starts at the likelihood the
-    one-state fit reached rather than looking for that basin again in six dimensions.
+    A second state is idle with b2 = 0 (Dc2 then changes nothing; it is set to the middle
+    of its prior); a cut-off at the top of its prior (1 m/s) lowers the state's effect by
+    at most 1 % in the fastest slips. The wider search so starts at the likelihood the
+    one-state fit reached rather than looking for that basin again in more dimensions.
 
     Parameters
     ----------
     posterior
-        A one-state fit.
+        A one-state fit without a cut-off.
+    states
+        The wider law's state variables, 1 or 2.
+    cutoff
+        Whether the wider law has a cut-off speed.
 
     Returns
     -------
     numpy.ndarray
-        Shape (:data:`NESTED_START_GUESSES`, 6).
+        Shape (:data:`NESTED_START_GUESSES`, coordinates of the wider law).
 
     Raises
     ------
     SlipwaveError
-        If the fit is not a one-state fit.
+        If the fit is not a one-state fit without a cut-off, or the law is not wider.
     """
-    if posterior.states != 1:
-        raise SlipwaveError(f"a two-state search starts from a one-state fit, not a "
-                            f"{posterior.states}-state one")
+    if posterior.states != 1 or posterior.cutoff:
+        raise SlipwaveError("a wider law's search starts from a one-state fit without a "
+                            f"cut-off, not a {posterior.states}-state one"
+                            + (" with a cut-off" if posterior.cutoff else ""))
+    if states == 1 and not cutoff:
+        raise SlipwaveError("the law to start is the one-state law itself: nothing to nest")
     finite = np.isfinite(posterior.logliks)
     best = posterior.points[finite][np.argsort(posterior.logliks[finite])[-NESTED_START_GUESSES:]]
-    idle = np.array([0.0, SECOND_STATE_BOX[1].mean()])
+    idle = ([0.0, SECOND_STATE_BOX[1].mean()] if states == 2 else []) + (
+        [CUTOFF_BOX[0, 1]] if cutoff else [])
     return np.hstack([best, np.tile(idle, (best.shape[0], 1))])
 
 
@@ -718,11 +791,13 @@ def posterior_dataset(posterior: SliderPosterior, settings: SliderFitSettings,
                      {"long_name": "the guesses evaluated"}),
          "loglik": ("guess", posterior.logliks,
                     {"long_name": "summed synthetic log-likelihood of the fitted records"})},
-        coords={"parameter": list(parameters(posterior.states))},
+        coords={"parameter": list(parameters(posterior.states, posterior.cutoff))},
         attrs={"title": "rate-and-state friction fitted to spring-slider records",
                "records": " ".join(posterior.records), "evolution": posterior.evolution,
                "seconds": seconds,
-               **{f"setting_{name}": value for name, value in asdict(settings).items()}},
+               # netCDF has no boolean attribute: a flag is kept as 0 or 1
+               **{f"setting_{name}": int(value) if isinstance(value, bool) else value
+                  for name, value in asdict(settings).items()}},
     )
 
 

@@ -22,6 +22,14 @@ adds b2 ln(v0 theta2 / Dc2) to psi and evolves by the same law (Ruina 1983; Blan
 and Tullis 1986 for b2 < 0). A two-state law's ``log_state`` carries the two
 logarithms on its last axis.
 
+A cut-off speed vc bounds the state's effect for young contacts: each state's term
+becomes b ln(v0 theta / Dc + v0 / vc), the logarithm's argument plus a constant (the
+form of Okubo 1989's cut-off velocity, QDYN's ``RNS_LAW = 1``, and of the heuristic
+law with a cut-off time Dc / vc that Heslot et al. 1994 fitted to paper on paper).
+Well below vc the law is the one above; well above it the state's effect is spent and
+the steady friction rises as a ln(v): steady sliding strengthens with speed, and fast
+slips meet more friction than slow ones.
+
 >>> law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.4)
 >>> round(float(steady_friction(law, 1e-5)), 6)  # 10 v0: (a - b) ln 10 below mu0
 0.388487
@@ -72,6 +80,9 @@ class RateState:
         The second state's evolution effect (0 with no second state).
     dc2
         The second state's memory length, m (None: a one-state law).
+    cutoff_speed
+        The cut-off speed vc above which the states' effect is spent, m/s (None: no
+        cut-off).
 
     """
 
@@ -83,6 +94,7 @@ class RateState:
     evolution: Literal["aging", "slip"] = "aging"
     b2: float = 0.0
     dc2: float | None = None
+    cutoff_speed: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.a > 0 and self.b >= 0 and self.dc > 0 and self.v0 > 0
@@ -95,6 +107,9 @@ class RateState:
             raise SlipwaveError(
                 f"a second state needs a memory length dc2 > 0, got b2={self.b2}, "
                 f"dc2={self.dc2}")
+        if self.cutoff_speed is not None and not (np.isfinite(self.cutoff_speed)
+                                                  and self.cutoff_speed > 0):
+            raise SlipwaveError(f"a cut-off speed must be > 0, got {self.cutoff_speed}")
         if self.evolution not in EVOLUTION_LAWS:
             raise SlipwaveError(
                 f"unknown state evolution {self.evolution!r}: one of {', '.join(EVOLUTION_LAWS)}")
@@ -116,13 +131,48 @@ def states(law: RateState) -> tuple[tuple[float, float], ...]:
     return ((law.b, law.dc),) if law.dc2 is None else ((law.b, law.dc), (law.b2, law.dc2))
 
 
-def _psi(law: RateState, log_state: np.ndarray | float) -> np.ndarray:
-    """The states' part of the friction, mu0 + sum of b ln(v0 theta / dc)."""
+def cutoff_log_ages(law: RateState) -> tuple[float, ...] | None:
+    """Each state's cut-off age ln(Dc / vc), below which its effect is spent.
+
+    Parameters
+    ----------
+    law
+        The friction law.
+
+    Returns
+    -------
+    tuple or None
+        ln(Dc / vc) per state (Dc / vc in s); None for a law without a cut-off.
+    """
+    if law.cutoff_speed is None:
+        return None
+    return tuple(float(np.log(dc / law.cutoff_speed)) for _, dc in states(law))
+
+
+def state_part(law: RateState, log_state: np.ndarray | float) -> np.ndarray:
+    """The states' part of the friction, psi: mu0 plus each state's term.
+
+    Parameters
+    ----------
+    law
+        The friction law.
+    log_state
+        The natural logarithm of the state theta (theta in s); a two-state law's two on
+        the last axis.
+
+    Returns
+    -------
+    numpy.ndarray
+        psi = mu0 + sum of b ln(v0 theta / Dc) (b ln(v0 theta / Dc + v0 / vc) with a
+        cut-off).
+    """
     log_state = np.asarray(log_state, dtype=float)
-    if law.dc2 is None:
-        return law.mu0 + law.b * (np.log(law.v0 / law.dc) + log_state)
-    return law.mu0 + sum(b * (np.log(law.v0 / dc) + log_state[..., i])
-                         for i, (b, dc) in enumerate(states(law)))
+    logs = [log_state] if law.dc2 is None else [log_state[..., i] for i in range(2)]
+    ages = cutoff_log_ages(law)
+    if ages is not None:
+        logs = [np.logaddexp(log, age) for log, age in zip(logs, ages, strict=True)]
+    return law.mu0 + sum(b * (np.log(law.v0 / dc) + log)
+                         for (b, dc), log in zip(states(law), logs, strict=True))
 
 
 def friction(law: RateState, speed: np.ndarray | float,
@@ -144,7 +194,7 @@ def friction(law: RateState, speed: np.ndarray | float,
     numpy.ndarray
         The friction coefficient.
     """
-    scale = np.exp(np.minimum(_psi(law, log_state) / law.a, EXPONENT_CAP)) / (2.0 * law.v0)
+    scale = np.exp(np.minimum(state_part(law, log_state) / law.a, EXPONENT_CAP)) / (2.0 * law.v0)
     return law.a * np.arcsinh(np.asarray(speed, dtype=float) * scale)
 
 
@@ -169,7 +219,7 @@ def slip_rate(law: RateState, friction_coefficient: np.ndarray | float,
     """
     mu = np.asarray(friction_coefficient, dtype=float)
     # 2 v0 exp(-psi/a) sinh(mu/a), formed in logarithms: both exponents reach hundreds
-    exponent = np.minimum((np.abs(mu) - _psi(law, log_state)) / law.a, EXPONENT_CAP)
+    exponent = np.minimum((np.abs(mu) - state_part(law, log_state)) / law.a, EXPONENT_CAP)
     magnitude = law.v0 * np.exp(exponent)
     return np.sign(mu) * magnitude * -np.expm1(-2.0 * np.abs(mu) / law.a)
 
@@ -235,7 +285,7 @@ def steady_state(law: RateState, speed: np.ndarray | float) -> np.ndarray:
 
 
 def steady_friction(law: RateState, speed: np.ndarray | float) -> np.ndarray:
-    """The friction in steady sliding, about mu0 + (a - b - b2) ln(v / v0).
+    """The friction in steady sliding, about mu0 + (a - b - b2) ln(v / v0) well below vc.
 
     Parameters
     ----------
@@ -259,7 +309,9 @@ def critical_stiffness(law: RateState, normal_load: float, *, mass: float = 0.0,
     K_c = N (b - a) / Dc [1 + M V^2 / (N a Dc)] (Ruina 1983; Rice and Ruina 1983, for
     a slider of mass M under a normal load N driven at V): the Routh-Hurwitz bound of
     the law linearised about steady sliding, the same for the aging and the slip law.
-    Negative (never unstable) when b < a.
+    Negative (never unstable) when b < a. With a cut-off speed vc, the state's effect
+    about steady sliding at V is b vc / (vc + V) (the derivative of psi in ln(theta)),
+    which takes b's place.
 
     Parameters
     ----------
@@ -286,4 +338,6 @@ def critical_stiffness(law: RateState, normal_load: float, *, mass: float = 0.0,
         raise SlipwaveError("the critical stiffness here is a one-state law's; this law has "
                             f"a second state (b2={law.b2}, dc2={law.dc2})")
     inertia = mass * drive_speed**2 / (normal_load * law.a * law.dc)
-    return normal_load * (law.b - law.a) / law.dc * (1.0 + inertia)
+    effect = law.b if law.cutoff_speed is None else (
+        law.b * law.cutoff_speed / (law.cutoff_speed + drive_speed))
+    return normal_load * (effect - law.a) / law.dc * (1.0 + inertia)

@@ -46,7 +46,9 @@ from slipwave.errors import SlipwaveError
 from slipwave.solver.rate_state import (
     EXPONENT_CAP,
     RateState,
+    cutoff_log_ages,
     slip_rate,
+    state_part,
     state_rate,
     states,
     steady_friction,
@@ -115,12 +117,12 @@ def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type:
     """
     a, v0 = law.a, law.v0
     pairs = states(law)
-    weights = [b for b, _ in pairs]
     lengths = [dc for _, dc in pairs]
     loading, push = bench.stiffness / bench.normal_load, bench.normal_load / bench.mass
     offset = law.mu0 + sum(b * math.log(v0 / dc) for b, dc in pairs)
     aging = law.evolution == "aging"
     count = len(pairs)
+    ages = cutoff_log_ages(law)
     # unrolled for one state and an optional second: loops over one or two floats cost
     # more than the arithmetic in this, the integration's innermost call
     first_weight, first_length = pairs[0]
@@ -136,14 +138,31 @@ def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type:
         log_ratio = math.log(magnitude / length) + log_state
         return -magnitude / length * log_ratio, -(log_ratio + 1.0) / length
 
+    def term(weight: float, log_state: float, index: int) -> tuple[float, float, float]:
+        """A state's term in psi and its first and second derivatives in ln(theta)."""
+        if ages is None:
+            return weight * log_state, weight, 0.0
+        excess = log_state - ages[index]  # ln(theta vc / Dc)
+        share = 1.0 / (1.0 + math.exp(min(-excess, EXPONENT_CAP)))
+        lifted = (log_state + math.log1p(math.exp(-excess)) if excess > 0
+                  else ages[index] + math.log1p(math.exp(excess)))
+        return weight * lifted, weight * share, weight * share * (1.0 - share)
+
     def parts(y: np.ndarray) -> tuple[float, float, float, float, float, list[float],
-                                      list[float], list[float]]:
-        """The shortfall, speed, d mu/dv, dv/d mu, tanh(mu/a), ln theta, rates, d rates/d|v|."""
+                                      list[float], list[float], list[float], list[float]]:
+        """Shortfall, speed, mu'(v), v'(mu), tanh(mu/a), ln theta, rates, rates'(|v|), psi', psi''.
+
+        The last two: each state's term's derivatives in its ln(theta).
+        """
         f, shortfall, *logs = y.tolist()  # plain floats: numpy's scalars are slow here
         mu = f - shortfall
-        psi = offset + first_weight * logs[0]
+        part, effect, bend = term(first_weight, logs[0], 0)
+        psi, effects, bends = offset + part, [effect], [bend]
         if count == 2:
-            psi += second_weight * logs[1]
+            part, effect, bend = term(second_weight, logs[1], 1)
+            psi += part
+            effects.append(effect)
+            bends.append(bend)
         level = abs(mu) / a
         speed = math.copysign(v0 * math.exp(min(level - psi / a, EXPONENT_CAP))
                               * -math.expm1(-2.0 * level), mu)
@@ -159,36 +178,39 @@ def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type:
             rates.append(rate)
             slopes.append(slope)
         return (shortfall, speed, stiffness, compliance, math.tanh(mu / a), logs, rates,
-                slopes)
+                slopes, effects, bends)
 
     def rhs(_: float, y: np.ndarray) -> np.ndarray:
-        shortfall, speed, stiffness, _compliance, direction, _logs, rates, _slopes = parts(y)
+        (shortfall, speed, stiffness, _compliance, direction, _logs, rates, _slopes,
+         effects, _bends) = parts(y)
         loading_rate = loading * (drive_speed - speed)
-        evolution = first_weight * rates[0]
+        evolution = effects[0] * rates[0]
         if count == 2:
-            evolution += second_weight * rates[1]
+            evolution += effects[1] * rates[1]
         friction_rate = push * stiffness * shortfall + direction * evolution
         return np.array([loading_rate, loading_rate - friction_rate, *rates])
 
     def jacobian(_: float, y: np.ndarray) -> np.ndarray:
-        shortfall, speed, stiffness, dv_dmu, direction, logs, rates, slopes = parts(y)
+        (shortfall, speed, stiffness, dv_dmu, direction, logs, rates, slopes, effects,
+         bends) = parts(y)
         sign = math.copysign(1.0, speed)
-        dv_dstate = [-b / a * speed for b in weights]
+        dv_dstate = [-effect / a * speed for effect in effects]
         # each state's rate in mu and in every ln theta
         drate_dmu = [slope * sign * dv_dmu for slope in slopes]
         drate_dstate = [[slope * sign * dv for dv in dv_dstate] for slope in slopes]
         for i in range(count):
             drate_dstate[i][i] += (-math.exp(min(-logs[i], EXPONENT_CAP)) if aging
                                    else -abs(speed) / lengths[i])
-        weighted_rate = sum(b * rate for b, rate in zip(weights, rates, strict=True))
-        # the friction's rate, push stiffness e + tanh(mu/a) sum b rate, in mu, e, ln theta
+        weighted_rate = sum(e * rate for e, rate in zip(effects, rates, strict=True))
+        # the friction's rate, push stiffness e + tanh(mu/a) sum psi' rate, in mu, e, ln theta
         friction_dmu = (-push * stiffness * direction / a * shortfall
                         + (1.0 - direction**2) / a * weighted_rate
-                        + direction * sum(b * d for b, d in zip(weights, drate_dmu,
+                        + direction * sum(e * d for e, d in zip(effects, drate_dmu,
                                                                 strict=True)))
         friction_de = push * stiffness
-        friction_dstate = [push * stiffness * weights[j] / a * shortfall + direction * sum(
-            weights[i] * drate_dstate[i][j] for i in range(count)) for j in range(count)]
+        friction_dstate = [push * stiffness * effects[j] / a * shortfall + direction * (sum(
+            effects[i] * drate_dstate[i][j] for i in range(count)) + bends[j] * rates[j])
+            for j in range(count)]
         loading_row = [-loading * dv_dmu, loading * dv_dmu, *(-loading * d for d in dv_dstate)]
         friction_row = [friction_dmu, friction_de - friction_dmu, *friction_dstate]
         return np.array([loading_row,
@@ -417,8 +439,7 @@ def _log_speed_above(law: RateState, mu: float, log_state: np.ndarray, bound: fl
     """
     if mu <= 0.0:
         return -700.0
-    psi = law.mu0 + sum(b * (math.log(law.v0 / dc) + float(log_state[i]))
-                        for i, (b, dc) in enumerate(states(law)))
+    psi = float(state_part(law, log_state if law.dc2 is not None else log_state[0]))
     return (math.log(law.v0 / bound) + (mu - psi) / law.a
             + math.log(-math.expm1(-2.0 * mu / law.a)))
 
