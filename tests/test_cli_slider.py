@@ -54,12 +54,16 @@ def test_ingest_stores_the_bench_and_the_role(records: dict[str, Path]) -> None:
     assert float(record.time[0]) == 0.0
 
 
-def test_fit_predict_and_report(records: dict[str, Path], tmp_path: Path) -> None:
+@pytest.mark.parametrize("law", [[], ["--cutoff"]])
+def test_fit_predict_and_report(records: dict[str, Path], tmp_path: Path,
+                                law: list[str]) -> None:
     fit, posterior = tmp_path / "fit.json", tmp_path / "posterior.nc"
     assert main(["slider-fit", str(records["a"]), str(records["b"]), "-o", str(fit),
-                 "--posterior", str(posterior), *SMALL]) == 0
+                 "--posterior", str(posterior), *SMALL, *law]) == 0
     result = json.loads(fit.read_text())
-    assert result["records"] == ["a", "b"] and result["guesses"] == 8
+    assert result["records"] == ["a", "b"] and result["settings"]["cutoff"] == bool(law)
+    assert result["guesses"] == (10 if law else 8)  # two design guesses per parameter
+    assert ("cutoff_speed" in result["parameters"]) == bool(law)
     predictions = []
     for name in ("a", "c"):
         predictions.append(tmp_path / f"{name}.json")
@@ -74,6 +78,7 @@ def test_fit_predict_and_report(records: dict[str, Path], tmp_path: Path) -> Non
     html = page.read_text()
     assert "held out" in html and "regimes predicted right" in html
     assert 'src="data:image/png;base64,' in html
+    assert ("cut-off speed vc" in html) == bool(law)
 
 
 def test_the_fit_refuses_a_record_held_out(records: dict[str, Path], tmp_path: Path,
