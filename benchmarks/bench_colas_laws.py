@@ -51,7 +51,6 @@ from slipwave.fit.slider import (
     simulated_windows,
 )
 from slipwave.slider_campaign import read_slider_campaign
-from slipwave.solver.rate_state import RateState
 from targets import check, finish
 
 ROOT = Path(__file__).parents[1]
@@ -72,17 +71,13 @@ FAMILIES = {"aging": ("aging", ""), "slip": ("slip", ""),
 DROP = FEATURES.index("drop")
 
 
-def _law(point: np.ndarray, evolution: str) -> RateState:
-    """(a, b - a, log10 Dc, mu0[, b2, log10 Dc2 | log10 vc]) as a law."""
-    return law_at(point, evolution)
-
-
 def _drops(job: tuple[tuple[SliderRecord, ...], np.ndarray, str]) -> np.ndarray:
     """Each record's simulated windows' mean drop and its standard error (NaN: failed)."""
     records, point, evolution = job
+    law = law_at(point, evolution)
     out = []
     for i, record in enumerate(records):
-        windows = simulated_windows(record, _law(point, evolution), MEMBERS, SEED + i)
+        windows = simulated_windows(record, law, MEMBERS, SEED + i)
         drops = windows[np.isfinite(windows[:, DROP]), DROP]
         out.append((drops.mean(), drops.std(ddof=1) / np.sqrt(drops.size))
                    if drops.size > 1 else (np.nan, np.nan))

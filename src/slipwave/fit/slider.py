@@ -569,8 +569,8 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
     start
         Guesses evaluated with the design (rows of the search's coordinates; those outside
         the prior are left out): a one-state fit's best guesses with an idle second state
-        (:func:`nested_start`), from which a two-state search starts where the nested law
-        already fits.
+        or cut-off (:func:`nested_start`), from which a wider law's search starts where the
+        nested law already fits.
 
     Returns
     -------
