@@ -18,6 +18,11 @@ from slipwave.errors import SlipwaveError
 from slipwave.identity import identity_of
 from slipwave.io.atomic import atomic_output
 
+WAVE_COLUMNS = ("t_start", "t_end", "frames", "x_start", "x_end", "x_min", "x_max",
+                "direction", "speed", "extent", "kind")
+"""The columns of a waves table: the video's (:func:`slipwave.video.track_waves`) and a
+quasi-dynamic simulation's (:func:`slipwave.solver.fronts.front_waves`)."""
+
 
 def write_table(table: pd.DataFrame, path: str | PathLike[str],
                 identity: Mapping[Any, Any] | None = None) -> None:

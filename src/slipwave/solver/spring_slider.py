@@ -43,6 +43,7 @@ from scipy.integrate import solve_ivp
 from slipwave import __version__
 from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
+from slipwave.solver.quasi_dynamic_steps import slip_speed
 from slipwave.solver.rate_state import (
     EXPONENT_CAP,
     RateState,
@@ -91,6 +92,10 @@ class SpringSlider:
         The speed V of the spring's far end, m/s.
     normal_load
         The normal load N, newtons (M g for a slider lying on a flat).
+    damping
+        Radiation damping eta, N s/m: a massless slider's resistance to its speed, the
+        quasi-dynamic approximation of inertia (Rice 1993), so that the spring's force
+        is N mu + eta v. Only with ``mass`` 0.
 
     """
 
@@ -98,13 +103,17 @@ class SpringSlider:
     stiffness: float
     drive_speed: float
     normal_load: float
+    damping: float = 0.0
 
     def __post_init__(self) -> None:
         if not (self.mass >= 0 and self.stiffness > 0 and self.drive_speed >= 0
-                and self.normal_load > 0):
+                and self.normal_load > 0 and self.damping >= 0):
             raise SlipwaveError(
-                "a spring-slider needs mass >= 0, stiffness > 0, drive speed >= 0 and normal "
-                f"load > 0, got {asdict(self)}")
+                "a spring-slider needs mass >= 0, stiffness > 0, drive speed >= 0, normal "
+                f"load > 0 and damping >= 0, got {asdict(self)}")
+        if self.damping > 0 and self.mass > 0:
+            raise SlipwaveError("radiation damping stands for a massless slider's inertia: "
+                                f"give mass 0 with damping {self.damping} N s/m")
 
 
 def _inertial(bench: SpringSlider, law: RateState, drive_speed: float):  # type: ignore[no-untyped-def]
@@ -228,11 +237,26 @@ def _quasi_static(bench: SpringSlider, law: RateState, drive_speed: float):  # t
 
     def rhs(_: float, y: np.ndarray) -> np.ndarray:
         log_state = y[1] if one else y[1:]
-        v = float(slip_rate(law, y[0], log_state))
+        v = float(_massless_speed(bench, law, np.array([y[0]]), log_state)[0])
         return np.concatenate([[loading * (drive_speed - v)],
                                np.atleast_1d(state_rate(law, v, log_state))])
 
     return rhs, None
+
+
+def _massless_speed(bench: SpringSlider, law: RateState, ratio: np.ndarray,
+                    log_state: np.ndarray | float) -> np.ndarray:
+    """A massless slider's speed when the spring pulls with ``ratio`` times the load.
+
+    Without damping the law's inverse; with it, the speed at which friction and damping
+    together carry the spring's force.
+    """
+    if bench.damping == 0.0:
+        return slip_rate(law, ratio, log_state)
+    psi = np.broadcast_to(state_part(law, log_state), ratio.shape)
+    load = bench.normal_load
+    return np.array([slip_speed(f * load, load, p, bench.damping, law.a, law.v0)
+                     for f, p in zip(ratio, psi, strict=True)])
 
 
 def simulate_spring_slider(
@@ -298,7 +322,10 @@ def simulate_spring_slider(
     if log_state.size != len(states(law)):
         raise SlipwaveError(f"the law has {len(states(law))} state(s), the initial state "
                             f"{log_state.size}")
-    ratio = float(steady_friction(law, steady_speed)) if initial_ratio is None else initial_ratio
+    # steady sliding: the spring carries the law's steady friction and the damping
+    steady = float(steady_friction(law, steady_speed)) + (
+        bench.damping * steady_speed / bench.normal_load)
+    ratio = steady if initial_ratio is None else initial_ratio
     # the slider starts at the speed at which the law carries the spring's force
     state = np.concatenate([[ratio], log_state])
     start_slip = float(slip_rate(law, ratio, log_state[0] if law.dc2 is None else log_state))
@@ -461,8 +488,13 @@ def _to_dataset(bench: SpringSlider, law: RateState, times: np.ndarray, values: 
                 pieces: list[tuple[float, float, float]]) -> xr.Dataset:
     """The record as a Dataset with CF attributes."""
     ratio, log_state = values[0], values[2]
-    mu = ratio - values[1]
-    speed = slip_rate(law, mu, log_state if law.dc2 is None else values[2:].T)
+    state = log_state if law.dc2 is None else values[2:].T
+    if bench.damping > 0:
+        speed = _massless_speed(bench, law, ratio, state)
+        mu = ratio - bench.damping * speed / bench.normal_load
+    else:
+        mu = ratio - values[1]
+        speed = slip_rate(law, mu, state)
     drive = np.zeros_like(times)
     for begin, end, drive_speed in pieces:
         inside = times > begin

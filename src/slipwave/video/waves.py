@@ -16,9 +16,7 @@ import pandas as pd
 import xarray as xr
 from scipy import ndimage, stats
 
-WAVE_COLUMNS = ("t_start", "t_end", "frames", "x_start", "x_end", "x_min", "x_max",
-                "direction", "speed", "extent", "kind")
-"""Columns of :func:`track_waves`."""
+from slipwave.io.tables import WAVE_COLUMNS
 
 SMOOTHING = 3
 """Pixels along the band over which :func:`change` averages."""

@@ -1,0 +1,531 @@
+"""Compiled right-hand side and Jacobian of a contact under rate-and-state friction.
+
+The contact's closed nodes are fixed over a stretch of the integration: the driver
+(:mod:`slipwave.solver.quasi_dynamic`) reduces the body onto them
+(:class:`Reduction`), and every quantity needed is then an affine map of the closed
+nodes' positions s relative to the flat (mm) and of the flat's tangential and normal
+positions dx, dy: ``M s + dx m_x + dy m_y + m_0``. The state is ``y = [s (n), ln
+theta (n per state)]``; an open node's entries are frozen.
+
+At a closed node of normal force P and shear load tau (the elastic force that
+drives it to slip, the flat's force on it with the sign reversed), the slip rate v
+balances friction and the radiation damping eta v of the waves it sheds (Rice
+1993):
+
+    |tau| = P a asinh(|v| exp(psi / a) / (2 v0)) + eta |v|,  sign(v) = sign(tau),
+
+solved by Newton's method (:func:`slip_speed`). The system is stiff wherever a node
+creeps under a small normal force (its relaxation time a P / (K v) falls to
+microseconds as it is about to open), so the driver integrates it implicitly with
+the analytic Jacobian (:func:`jacobian`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+_NEWTON_ITERATIONS = 80
+_NEWTON_TOLERANCE = 1e-13  # on ln|v|: relative on v
+_NEGLIGIBLE_LOG = 700.0  # a rate below exp(-700) mm/s: no damping is felt beside friction
+
+
+class Law(NamedTuple):
+    """A rate-and-state law in the steps' units (mm, mm/s) and form.
+
+    Attributes
+    ----------
+    a
+        The direct effect.
+    v0
+        The reference rate, mm/s.
+    mu0
+        The steady friction at ``v0``.
+    aging
+        The aging law (else the slip law).
+    b
+        Each state's evolution effect.
+    log_ratio
+        Each state's ln(v0 / Dc).
+    dc
+        Each state's memory length, mm.
+    cutoff_ages
+        Each state's ln(Dc / vc), -inf without a cut-off.
+    """
+
+    a: float
+    v0: float
+    mu0: float
+    aging: bool
+    b: np.ndarray
+    log_ratio: np.ndarray
+    dc: np.ndarray
+    cutoff_ages: np.ndarray
+
+
+class Reduction(NamedTuple):
+    """The body reduced onto its closed nodes, and how the flat moves.
+
+    Each map ``(M, x, y, 0)`` gives ``M s + dx x + dy y + 0`` from the closed nodes'
+    positions s relative to the flat: ``loads`` the flat's forces on the closed nodes
+    ``[r_x, r_y]`` (per width), ``gaps`` the open nodes' gaps, ``readouts`` T, N (per
+    width) and the sensors.
+
+    Attributes
+    ----------
+    nodes
+        The number of contact nodes, n.
+    closed
+        The closed nodes' indices.
+    loads_M, loads_x, loads_y, loads_0
+        The loads' map.
+    gaps_M, gaps_x, gaps_y, gaps_0
+        The gaps' map.
+    readouts_M, readouts_x, readouts_y, readouts_0
+        The readouts' map; its row 1 sums the normal load.
+    flat
+        dx at t0, t0, the drive's speed, dy held, the normal load per width, and 1
+        under force control (dy then keeps the readouts' row 1 at the load), else 0.
+    damping
+        Each node's radiation damping, N s/mm per mm of width.
+    """
+
+    nodes: int
+    closed: np.ndarray
+    loads_M: np.ndarray
+    loads_x: np.ndarray
+    loads_y: np.ndarray
+    loads_0: np.ndarray
+    gaps_M: np.ndarray
+    gaps_x: np.ndarray
+    gaps_y: np.ndarray
+    gaps_0: np.ndarray
+    readouts_M: np.ndarray
+    readouts_x: np.ndarray
+    readouts_y: np.ndarray
+    readouts_0: np.ndarray
+    flat: np.ndarray
+    damping: np.ndarray
+
+
+_NORMAL = 1  # the readouts' row that sums the normal load
+
+
+@njit(cache=True)
+def _log_add_exp(x: float, y: float) -> float:
+    """ln(e^x + e^y), with y = -inf for a law without a cut-off."""
+    m = max(x, y)
+    if m == -np.inf:
+        return m
+    return m + np.log1p(np.exp(-abs(x - y)))
+
+
+@njit(cache=True)
+def state_part(y: np.ndarray, node: int, n: int, law: Law) -> float:
+    """Psi at a node: mu0 plus each state's b ln(v0 theta / Dc (+ v0 / vc)).
+
+    Parameters
+    ----------
+    y
+        The state.
+    node
+        The node.
+    n
+        The number of nodes.
+    law
+        The law.
+
+    Returns
+    -------
+    float
+        Psi, as :func:`slipwave.solver.rate_state.state_part` forms it.
+    """
+    psi = law.mu0
+    for k in range(law.b.size):
+        psi += law.b[k] * (law.log_ratio[k]
+                           + _log_add_exp(y[n * (k + 1) + node], law.cutoff_ages[k]))
+    return psi
+
+
+@njit(cache=True)
+def law_friction(log_scaled: float, a: float) -> float:
+    """The law's a asinh(X), in logarithms: exact at any psi over a.
+
+    Parameters
+    ----------
+    log_scaled
+        ln X, X = |v| exp(psi / a) / (2 v0).
+    a
+        The direct effect.
+
+    Returns
+    -------
+    float
+        The friction coefficient.
+    """
+    if log_scaled > 0.0:
+        return a * (log_scaled + np.log1p(np.sqrt(1.0 + np.exp(-2.0 * log_scaled))))
+    return a * np.arcsinh(np.exp(log_scaled))
+
+
+@njit(cache=True)
+def slip_speed(tau: float, pressure: float, psi: float, damping: float, a: float,
+               v0: float) -> float:
+    """The slip rate at which friction and radiation damping carry a shear load.
+
+    Newton's method on ln|v|, where the balance is convex: from the smaller of two
+    upper bounds (the undamped rate, the damping's alone) it falls to the root without
+    overshooting. Everything is formed in logarithms, so that psi / a may be in the
+    hundreds (a slab's friction near 1 with a of a few thousandths).
+
+    Parameters
+    ----------
+    tau
+        The shear load, signed.
+    pressure
+        The normal force P; without compression only the damping holds the node.
+    psi
+        The states' part of the friction.
+    damping
+        The radiation damping eta (0: none).
+    a
+        The direct effect.
+    v0
+        The reference rate.
+
+    Returns
+    -------
+    float
+        The slip rate, of tau's sign.
+    """
+    load = abs(tau)
+    if load == 0.0:
+        return 0.0
+    if pressure <= 0.0:
+        return tau / damping
+    ratio = load / (pressure * a)
+    # the undamped rate 2 v0 exp(-psi/a) sinh(ratio)
+    log_speed = np.log(v0) + ratio - psi / a + np.log(-np.expm1(-2.0 * ratio))
+    if damping > 0.0 and log_speed > -_NEGLIGIBLE_LOG:
+        log_speed = min(log_speed, np.log(load / damping))
+        offset = psi / a - np.log(2.0 * v0)
+        for _ in range(_NEWTON_ITERATIONS):
+            log_scaled = log_speed + offset
+            speed = np.exp(log_speed)
+            excess = pressure * law_friction(log_scaled, a) + damping * speed - load
+            slope = pressure * a / np.sqrt(1.0 + np.exp(-2.0 * log_scaled)) + damping * speed
+            change = excess / slope
+            log_speed -= change
+            if abs(change) <= _NEWTON_TOLERANCE:
+                break
+    speed = np.exp(log_speed)
+    return speed if tau > 0.0 else -speed
+
+
+@njit(cache=True)
+def speed_partials(tau: float, pressure: float, psi: float, damping: float, a: float,
+                   v0: float, speed: float) -> tuple[float, float, float]:
+    """The slip rate's derivatives in tau, P and psi, at the balance's root.
+
+    From the implicit function: with F_v = P a / sqrt(v^2 + (2 v0 exp(-psi/a))^2) + eta
+    (the balance's slope in |v|), dv/dtau = 1 / F_v, dv/dP = -sign(tau) mu / F_v and
+    dv/dpsi = -sign(tau) P X / (sqrt(1 + X^2) F_v), X = |v| exp(psi/a) / (2 v0).
+
+    Parameters
+    ----------
+    tau, pressure, psi, damping, a, v0
+        As :func:`slip_speed`'s.
+    speed
+        :func:`slip_speed`'s result.
+
+    Returns
+    -------
+    tuple
+        dv/dtau, dv/dP, dv/dpsi.
+    """
+    if pressure <= 0.0:
+        return 1.0 / damping, 0.0, 0.0
+    magnitude = abs(speed)
+    floor = 2.0 * v0 * np.exp(-psi / a)  # the rate at which X is 1
+    spread = np.sqrt(magnitude * magnitude + floor * floor)
+    if spread == 0.0:  # stuck beyond what a double holds: nothing moves it
+        return 0.0, 0.0, 0.0
+    slope = pressure * a / spread + damping
+    if magnitude == 0.0:
+        return 1.0 / slope, 0.0, 0.0
+    sign = 1.0 if tau >= 0.0 else -1.0
+    log_scaled = np.log(magnitude) + psi / a - np.log(2.0 * v0)
+    share = 1.0 / np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
+    return (1.0 / slope, -sign * law_friction(log_scaled, a) / slope,
+            -sign * pressure * share / slope)
+
+
+@njit(cache=True)
+def _affine(M: np.ndarray, mx: np.ndarray, my: np.ndarray, m0: np.ndarray,
+            s: np.ndarray, dx: float, dy: float, out: np.ndarray) -> None:
+    """``out = M s + dx mx + dy my + m0``."""
+    for i in range(out.size):
+        value = dx * mx[i] + dy * my[i] + m0[i]
+        for j in range(s.size):
+            value += M[i, j] * s[j]
+        out[i] = value
+
+
+@njit(cache=True)
+def flat_position(t: float, s: np.ndarray, reduction: Reduction) -> tuple[float, float]:
+    """The flat's tangential and normal positions at a time.
+
+    Parameters
+    ----------
+    t
+        The time.
+    s
+        The closed nodes' positions relative to the flat.
+    reduction
+        The body reduced onto them.
+
+    Returns
+    -------
+    tuple
+        dx, dy: under force control dy is where the normal load is carried.
+    """
+    flat = reduction.flat
+    dx = flat[0] + flat[2] * (t - flat[1])
+    if flat[5] == 0.0:
+        return dx, flat[3]
+    row = reduction.readouts_M[_NORMAL]
+    known = dx * reduction.readouts_x[_NORMAL] + reduction.readouts_0[_NORMAL]
+    for j in range(s.size):
+        known += row[j] * s[j]
+    return dx, (flat[4] - known) / reduction.readouts_y[_NORMAL]
+
+
+@njit(cache=True)
+def _loads(t: float, y: np.ndarray, reduction: Reduction) -> tuple[np.ndarray, float, float]:
+    """The closed nodes' ``[r_x, r_y]``, and dx, dy."""
+    closed = reduction.closed
+    s = np.empty(closed.size)
+    for k in range(closed.size):
+        s[k] = y[closed[k]]
+    dx, dy = flat_position(t, s, reduction)
+    loads = np.empty(2 * closed.size)
+    _affine(reduction.loads_M, reduction.loads_x, reduction.loads_y, reduction.loads_0, s,
+            dx, dy, loads)
+    return loads, dx, dy
+
+
+@njit(cache=True)
+def rates(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray:
+    """The state's time derivative.
+
+    Parameters
+    ----------
+    t
+        The time.
+    y
+        The state.
+    reduction
+        The body reduced onto its closed nodes.
+    law
+        The friction law.
+
+    Returns
+    -------
+    numpy.ndarray
+        dy/dt: the closed nodes' slip rates and state rates, zero at the open ones.
+    """
+    n, closed = reduction.nodes, reduction.closed
+    c = closed.size
+    loads, _, _ = _loads(t, y, reduction)
+    out = np.zeros(y.size)
+    for k in range(c):
+        node = closed[k]
+        psi = state_part(y, node, n, law)
+        v = slip_speed(-loads[k], loads[c + k], psi, reduction.damping[node], law.a, law.v0)
+        out[node] = v
+        for m in range(law.b.size):
+            log_theta = y[n * (m + 1) + node]
+            rate = abs(v) / law.dc[m]
+            if law.aging:
+                out[n * (m + 1) + node] = np.exp(-log_theta) - rate
+            elif rate > 0.0:
+                out[n * (m + 1) + node] = -rate * (np.log(rate) + log_theta)
+    return out
+
+
+@njit(cache=True)
+def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray:
+    """The Jacobian of :func:`rates`, analytic.
+
+    The slip rate's derivatives are :func:`speed_partials`'; the loads' are the reduced
+    stiffness's (with the flat's normal position following the closed nodes under
+    force control).
+
+    Parameters
+    ----------
+    t
+        The time.
+    y
+        The state.
+    reduction
+        The body reduced onto its closed nodes.
+    law
+        The friction law.
+
+    Returns
+    -------
+    numpy.ndarray
+        (size, size): d(dy/dt)/dy.
+    """
+    n, closed = reduction.nodes, reduction.closed
+    c = closed.size
+    loads, _, _ = _loads(t, y, reduction)
+    M, loads_y = reduction.loads_M, reduction.loads_y
+    force = reduction.flat[5] != 0.0
+    normal_row, normal_y = reduction.readouts_M[_NORMAL], reduction.readouts_y[_NORMAL]
+    out = np.zeros((y.size, y.size))
+    for k in range(c):
+        node = closed[k]
+        tau, pressure = -loads[k], loads[c + k]
+        psi = state_part(y, node, n, law)
+        eta = reduction.damping[node]
+        v = slip_speed(tau, pressure, psi, eta, law.a, law.v0)
+        v_tau, v_p, v_psi = speed_partials(tau, pressure, psi, eta, law.a, law.v0, v)
+        for j in range(c):
+            d_shear, d_normal = M[k, j], M[c + k, j]
+            if force:  # the flat's normal position follows the closed nodes' positions
+                d_dy = -normal_row[j] / normal_y
+                d_shear += loads_y[k] * d_dy
+                d_normal += loads_y[c + k] * d_dy
+            out[node, closed[j]] = -v_tau * d_shear + v_p * d_normal
+        for m in range(law.b.size):
+            # d psi / d ln theta: the cut-off's logaddexp weighs the state's share
+            log_theta = y[n * (m + 1) + node]
+            share = 1.0 if law.cutoff_ages[m] == -np.inf else 1.0 / (
+                1.0 + np.exp(law.cutoff_ages[m] - log_theta))
+            out[node, n * (m + 1) + node] = v_psi * law.b[m] * share
+        sign = 1.0 if v >= 0.0 else -1.0
+        for m in range(law.b.size):
+            row = n * (m + 1) + node
+            log_theta = y[row]
+            rate = abs(v) / law.dc[m]
+            if law.aging:
+                by_speed, by_state = -sign / law.dc[m], -np.exp(-log_theta)
+            elif rate > 0.0:
+                by_speed = -sign / law.dc[m] * (np.log(rate) + log_theta + 1.0)
+                by_state = -rate
+            else:
+                by_speed, by_state = 0.0, 0.0
+            for j in range(c):
+                out[row, closed[j]] = by_speed * out[node, closed[j]]
+            for m2 in range(law.b.size):
+                column = n * (m2 + 1) + node
+                out[row, column] = by_speed * out[node, column] + (by_state if m2 == m else 0.0)
+    return out
+
+
+@njit(cache=True)
+def closed_speeds(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray:
+    """The closed nodes' slip rates.
+
+    Parameters
+    ----------
+    t
+        The time.
+    y
+        The state.
+    reduction
+        The body reduced onto its closed nodes.
+    law
+        The friction law.
+
+    Returns
+    -------
+    numpy.ndarray
+        One per closed node, in ``reduction.closed``'s order.
+    """
+    n, closed = reduction.nodes, reduction.closed
+    c = closed.size
+    loads, _, _ = _loads(t, y, reduction)
+    speeds = np.empty(c)
+    for k in range(c):
+        speeds[k] = slip_speed(-loads[k], loads[c + k], state_part(y, closed[k], n, law),
+                               reduction.damping[closed[k]], law.a, law.v0)
+    return speeds
+
+
+@njit(cache=True)
+def contact_margin(t: float, y: np.ndarray, reduction: Reduction, force_scale: float,
+                   gap_scale: float) -> float:
+    """The smallest of the closed nodes' normal forces and the open nodes' gaps, scaled.
+
+    Parameters
+    ----------
+    t
+        The time.
+    y
+        The state.
+    reduction
+        The body reduced onto its closed nodes.
+    force_scale, gap_scale
+        The force and the gap that count as 1.
+
+    Returns
+    -------
+    float
+        Negative where the contact must change: its root is when it does.
+    """
+    closed = reduction.closed
+    c = closed.size
+    loads, dx, dy = _loads(t, y, reduction)
+    margin = np.inf
+    for k in range(c):
+        margin = min(margin, loads[c + k] / force_scale)
+    if reduction.gaps_x.size:
+        s = np.empty(c)
+        for k in range(c):
+            s[k] = y[closed[k]]
+        gaps = np.empty(reduction.gaps_x.size)
+        _affine(reduction.gaps_M, reduction.gaps_x, reduction.gaps_y, reduction.gaps_0, s,
+                dx, dy, gaps)
+        for k in range(gaps.size):
+            margin = min(margin, gaps[k] / gap_scale)
+    return margin
+
+
+@njit(cache=True)
+def readouts(times: np.ndarray, ys: np.ndarray, reduction: Reduction) -> np.ndarray:
+    """The readouts, then dx and dy, at each time.
+
+    Parameters
+    ----------
+    times
+        The times.
+    ys
+        (size, times): the state at each.
+    reduction
+        The body reduced onto its closed nodes.
+
+    Returns
+    -------
+    numpy.ndarray
+        (readouts + 2, times).
+    """
+    closed = reduction.closed
+    c = closed.size
+    s = np.empty(c)
+    count = reduction.readouts_x.size
+    rows = np.empty((count + 2, times.size))
+    values = np.empty(count)
+    for m in range(times.size):
+        for k in range(c):
+            s[k] = ys[closed[k], m]
+        dx, dy = flat_position(times[m], s, reduction)
+        _affine(reduction.readouts_M, reduction.readouts_x, reduction.readouts_y,
+                reduction.readouts_0, s, dx, dy, values)
+        rows[:count, m] = values
+        rows[count, m] = dx
+        rows[count + 1, m] = dy
+    return rows
