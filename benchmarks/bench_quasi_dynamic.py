@@ -1,0 +1,158 @@
+"""The quasi-dynamic contact (issue 37): its 1-node reduction, its fronts' convergence, its time.
+
+The bench's slab (H/L 0.5, 76 N pressed without friction, the flat's normal position
+then held, driven at 0.048 mm/s) under rate-and-state friction (aging law, a 0.01,
+b 0.015, Dc 2 um, mu0 0.9: T/N near 0.85 at its slips, as the bench's near 1), with the
+polyurethane's radiation damping (density 1200 kg/m^3, shear waves at 44 m/s).
+
+1. The 1-node reduction against the quasi-dynamic spring-slider (scipy's LSODA on the
+   slider's own equations): the largest difference of T/N over 30 s of stick-slip.
+2. Convergence: the first 70 s (the stick, then eight or nine waves) at 80, 160 and 320
+   elements; each wave's front speed (Theil-Sen on the side it runs to), start and
+   drop; the median front speed at each mesh. Target: within 5 % between the mesh used
+   and twice it.
+3. Time: a 280 s test on one core at 80 and 160 elements. Target: <= 10 s at the mesh
+   whose front speed has converged; where the time goes (cProfile, at 160 elements).
+
+The runs are deterministic: no seed to choose.
+Run: make bench  (or python benchmarks/bench_quasi_dynamic.py)
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import cProfile
+import itertools
+import math
+import pstats
+import time
+
+import numpy as np
+import xarray as xr
+
+from slipwave.solver.fronts import front_waves
+from slipwave.solver.quasi_dynamic import (
+    Drive,
+    shear_impedance,
+    simulate_quasi_dynamic,
+    slab_body,
+    spring_slider_body,
+)
+from slipwave.solver.rate_state import RateState
+from slipwave.solver.slab import Slab
+from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
+from targets import check, finish
+
+LAW = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.9)
+DRIVE = Drive(normal_load=76.0, drive_speed=0.048)
+CONVERGENCE_TARGET = 0.05
+TIME_TARGET = 10.0
+MESHES = (80, 160, 320)
+MIN_EXTENT = 0.25  # the video's smallest wave
+
+
+def run(elements: int, duration: float) -> tuple[xr.Dataset, float]:
+    """A run of the bench's slab, and its time (the slab condensed beforehand)."""
+    body = slab_body(Slab(elements=elements))
+    start = time.process_time()
+    ds = simulate_quasi_dynamic(body, LAW, DRIVE, duration=duration, sample_rate=100.0,
+                                field_rate=10.0)
+    return ds, time.process_time() - start
+
+
+def one_node() -> None:
+    """The 1-node reduction against the damped spring-slider."""
+    law = RateState(a=0.01, b=0.015, dc=1e-6, mu0=0.6)
+    body = spring_slider_body(stiffness=1.0, normal_load=0.3, damping=1e-3)
+    start = time.process_time()
+    reduced = simulate_quasi_dynamic(body, law, Drive(0.3, 0.01), duration=30.0,
+                                     sample_rate=100.0)
+    middle = time.process_time()
+    slider = simulate_spring_slider(SpringSlider(0.0, 1000.0, 1e-5, 0.3, damping=1.0), law,
+                                    duration=30.0, sample_rate=100.0, initial_ratio=0.0,
+                                    initial_log_state=math.log(10.0))
+    end = time.process_time()
+    ratio = (reduced["T"] / reduced["N"]).values
+    difference = np.abs(ratio - slider["friction_ratio"].values)
+    print(f"quasi-dynamic: 1 node against the quasi-dynamic spring-slider (K 1000 N/m, "
+          f"K_c 1500, eta 1 N s/m, 30 s): T/N from {ratio.min():.4f} to {ratio.max():.4f}, "
+          f"largest difference {difference.max():.2e} (at a slip's sample), median "
+          f"{np.median(difference):.1e}; {middle - start:.2f} s against LSODA on the "
+          f"slider's equations {end - middle:.2f} s")
+
+
+def main() -> None:
+    print(f"quasi-dynamic: load average {os.getloadavg()[0]:.2f} before")
+    one_node()
+    slab = Slab(elements=160)
+    shear_modulus = slab.youngs_modulus / (2 * (1 + slab.poisson_ratio))
+    print(f"quasi-dynamic: shear impedance G/(2 c_s) {shear_impedance(slab):.3e} MPa s/mm; "
+          f"L_b = G Dc / (b sigma) {shear_modulus * LAW.dc * 1e3 / (LAW.b * 0.095):.2f} mm "
+          f"at the mean pressure of 76 N, {shear_modulus * LAW.dc * 1e3 / (LAW.b * 0.18):.2f}"
+          f" mm at that of 145 N (N grows with T under the held position)")
+    medians = {}
+    for elements in MESHES:
+        ds, seconds = run(elements, 70.0)
+        waves = front_waves(ds, min_extent=MIN_EXTENT)
+        ratio = (ds["T"] / ds["N"]).values
+        medians[elements] = float(waves["speed"].median())
+        spacing = 80.0 / elements
+        print(f"quasi-dynamic: {elements} elements ({spacing:.2f} mm), 70 s in {seconds:.1f} "
+              f"s ({ds.attrs['steps']} steps, {ds.attrs['jacobians']} Jacobians, "
+              f"{ds.attrs['contact_changes']} contact changes): {len(waves)} waves, median "
+              f"front speed {medians[elements]:.0f} mm/s, largest T/N {ratio.max():.4f}")
+        for wave in waves.itertuples():
+            print(f"    wave at {wave.t_start:7.3f} s from x {wave.x_start:6.2f} to "
+                  f"{wave.x_end:6.2f} mm ({wave.direction}, {wave.kind}): "
+                  f"{wave.speed:6.0f} mm/s")
+    for coarse, fine in itertools.pairwise(MESHES):
+        change = abs(medians[coarse] - medians[fine]) / medians[fine]
+        print(f"quasi-dynamic: median front speed {coarse} -> {fine} elements: "
+              f"{100 * change:.1f} %")
+    used = next((coarse for coarse, fine in itertools.pairwise(MESHES)
+                 if abs(medians[coarse] - medians[fine]) / medians[fine]
+                 <= CONVERGENCE_TARGET), MESHES[-1])
+    change = abs(medians[MESHES[-2]] - medians[MESHES[-1]]) / medians[MESHES[-1]]
+    status = check("front speed, 160 -> 320 elements", change, CONVERGENCE_TARGET,
+                   at_least=False)
+    print(f"quasi-dynamic: front speed converged to {100 * change:.1f} % between 160 and 320 "
+          f"elements ({status} the 5 % target); the mesh used: {used} elements")
+    for elements in (80, 160):
+        ds, seconds = run(elements, 280.0)
+        waves = front_waves(ds, min_extent=MIN_EXTENT)
+        verdict = ""
+        if elements == used:
+            status = check(f"280 s test at {elements} elements, s", seconds, TIME_TARGET,
+                           at_least=False)
+            verdict = f" ({status} the {TIME_TARGET:.0f} s target)"
+        print(f"quasi-dynamic: 280 s test at {elements} elements: {seconds:.1f} s"
+              f"{verdict}, {ds.attrs['steps']} steps, {len(waves)} waves")
+    profile = cProfile.Profile()
+    body = slab_body(Slab(elements=160))
+    profile.enable()
+    simulate_quasi_dynamic(body, LAW, DRIVE, duration=70.0, sample_rate=100.0,
+                           field_rate=10.0)
+    profile.disable()
+    stats = pstats.Stats(profile).stats  # type: ignore[attr-defined]
+    total = sum(entry[2] for entry in stats.values())
+    shares: dict[str, float] = {}
+    for (filename, _, name), entry in stats.items():
+        key = ("LSODA's own work (its LU factorisations and steps)" if name.endswith("lsoda>")
+               or name == "<built-in method scipy.integrate._odepack.lsoda>" else
+               f"{name} (compiled)" if filename.endswith("quasi_dynamic_steps.py") else None)
+        if key is not None:
+            shares[key] = shares.get(key, 0.0) + entry[2]
+    print("quasi-dynamic: where 70 s at 160 elements goes (cProfile, own time):")
+    for key, seconds in sorted(shares.items(), key=lambda item: -item[1]):
+        print(f"    {key}: {100 * seconds / total:.0f} %")
+    print(f"    the rest (Python: the driver, scipy's step wrapper, records): "
+          f"{100 * (1 - sum(shares.values()) / total):.0f} %")
+    finish()
+
+
+if __name__ == "__main__":
+    main()
