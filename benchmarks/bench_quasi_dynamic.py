@@ -13,6 +13,8 @@ polyurethane's radiation damping (density 1200 kg/m^3, shear waves at 44 m/s).
    and twice it.
 3. Time: a 280 s test on one core at 80 and 160 elements. Target: <= 10 s at the mesh
    whose front speed has converged; where the time goes (cProfile, at 160 elements).
+4. A figure of the 160-element run for the documentation (T/N, where the contact slips
+   against time, one wave's arrivals): docs/_static/quasi_dynamic_waves.png.
 
 The runs are deterministic: no seed to choose.
 Run: make bench  (or python benchmarks/bench_quasi_dynamic.py)
@@ -30,11 +32,16 @@ import itertools
 import math
 import pstats
 import time
+from pathlib import Path
 
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from slipwave.solver.fronts import front_waves
+from slipwave.solver.fronts import front_waves, slip_intervals
 from slipwave.solver.quasi_dynamic import (
     Drive,
     shear_impedance,
@@ -53,6 +60,7 @@ CONVERGENCE_TARGET = 0.05
 TIME_TARGET = 10.0
 MESHES = (80, 160, 320)
 MIN_EXTENT = 0.25  # the video's smallest wave
+FIGURE = Path(__file__).resolve().parent.parent / "docs" / "_static" / "quasi_dynamic_waves.png"
 
 
 def run(elements: int, duration: float) -> tuple[xr.Dataset, float]:
@@ -85,8 +93,41 @@ def one_node() -> None:
           f"slider's equations {end - middle:.2f} s")
 
 
+def figure(ds: xr.Dataset, elements: int) -> None:
+    """T/N, the slip intervals and one wave's arrivals, for the documentation."""
+    intervals = slip_intervals(ds)
+    x = ds["x"].values
+    waves = front_waves(ds, min_extent=MIN_EXTENT)
+    shown = waves.iloc[min(2, len(waves) - 1)]
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), constrained_layout=True)
+    axes[0].plot(ds["time"], ds["T"] / ds["N"], lw=0.8, color="k")
+    axes[0].set(ylabel="T / N", xlim=(0, float(ds["time"][-1])),
+                title=f"The bench's slab, rate-and-state friction, {elements} elements")
+    for row in intervals.itertuples():
+        axes[1].plot([row.start, row.end], [x[row.node]] * 2, color="tab:red", lw=1.5)
+    axes[1].set(ylabel="x (mm)", xlim=axes[0].get_xlim(), ylim=(-41, 41),
+                title="where the contact slips (slip rate above ten times the drive's)")
+    axes[1].set_xlabel("t (s)")
+    inside = intervals[(intervals["start"] >= shown["t_start"] - 1e-9)
+                       & (intervals["start"] <= shown["t_end"])]
+    first = inside.groupby("node")["start"].min()
+    axes[2].plot(1e3 * (first.to_numpy() - shown["t_start"]), x[first.index.to_numpy()], ".",
+                 color="tab:red")
+    axes[2].set(xlabel=f"t - {shown['t_start']:.3f} s (ms)", ylabel="x (mm)",
+                title=f"a wave's arrivals: from x = {shown['x_start']:.1f} mm, "
+                      f"{shown['speed'] / 1e3:.1f} m/s towards {shown['x_end']:.0f} mm")
+    fig.savefig(FIGURE, dpi=110)
+    plt.close(fig)
+    print(f"quasi-dynamic: figure {FIGURE.relative_to(FIGURE.parents[2])}")
+
+
 def main() -> None:
     print(f"quasi-dynamic: load average {os.getloadavg()[0]:.2f} before")
+    start = time.process_time()  # the compiled kernels, loaded (or compiled) once
+    simulate_quasi_dynamic(slab_body(Slab(elements=40)), LAW, DRIVE, duration=1.0,
+                           sample_rate=1.0)
+    print(f"quasi-dynamic: the kernels loaded and a first run in {time.process_time() - start:.1f}"
+          f" s")
     one_node()
     slab = Slab(elements=160)
     shear_modulus = slab.youngs_modulus / (2 * (1 + slab.poisson_ratio))
@@ -105,6 +146,8 @@ def main() -> None:
               f"s ({ds.attrs['steps']} steps, {ds.attrs['jacobians']} Jacobians, "
               f"{ds.attrs['contact_changes']} contact changes): {len(waves)} waves, median "
               f"front speed {medians[elements]:.0f} mm/s, largest T/N {ratio.max():.4f}")
+        if elements == 160:
+            figure(ds, elements)
         for wave in waves.itertuples():
             print(f"    wave at {wave.t_start:7.3f} s from x {wave.x_start:6.2f} to "
                   f"{wave.x_end:6.2f} mm ({wave.direction}, {wave.kind}): "
