@@ -69,6 +69,12 @@ the drive's speed."""
 _MAX_CONTACT_CHANGES = 100  # changes of the closed set at one instant before giving up
 _MAX_STEP = 0.1  # s: the longest step, so that a change of contact is looked for often
 
+JACOBIAN_BAND_NODES = 8
+"""The Jacobian the steps factorise keeps each node's coupling to this many neighbours on
+either side: the stiffness that sets the steps is local, and a band of 8 gave the same
+slips and front speeds as the whole Jacobian at 160 elements in a sixth of LSODA's own
+time (a Newton matrix with entries left out costs iterations, never accuracy)."""
+
 
 @dataclass(frozen=True)
 class ContactBody:
@@ -298,14 +304,18 @@ def _approach(body: ContactBody, normal_load: float) -> tuple[np.ndarray, float,
     raise SlipwaveError("the normal loading found no contact that carries the load")
 
 
-def _state_at(body: ContactBody, contact: _Contact, t: float, y: np.ndarray
+def _state_at(body: ContactBody, contact: _Contact, t: float, y: np.ndarray, stride: int
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Every node's displacements, the flat's forces ``[r_x, r_y]``, gaps; and dx."""
+    """Every node's displacements, the flat's forces ``[r_x, r_y]``, gaps; and dx.
+
+    ``stride``: entries per node in the state.
+    """
     n = body.nodes
     closed, open_ = contact.reduction.closed, contact.open
-    dx, dy = steps.flat_position(t, np.ascontiguousarray(y[closed]), contact.reduction)
+    s = np.ascontiguousarray(y[::stride][closed])
+    dx, dy = steps.flat_position(t, s, contact.reduction)
     u = np.zeros(2 * n)
-    u[closed] = dx + y[closed]
+    u[closed] = dx + s
     u[n + closed] = dy - body.initial_gap[closed]
     kept = np.concatenate([closed, n + closed])
     free = np.concatenate([open_, n + open_])
@@ -340,32 +350,31 @@ class _Stretch:
                  margin_scales: tuple[float, float]) -> None:
         self.contact, self.law, self.margin_scales = contact, law, margin_scales
         self.reduction = contact.reduction
+        size = contact.reduction.nodes * (1 + law.b.size)
+        self.band = min(JACOBIAN_BAND_NODES * (1 + law.b.size) + law.b.size, size - 1)
 
     def rates(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt."""
         return steps.rates(t, y, self.reduction, self.law)
 
     def jacobian(self, t: float, y: np.ndarray) -> np.ndarray:
-        """d(dy/dt)/dy."""
-        return steps.jacobian(t, y, self.reduction, self.law)
+        """d(dy/dt)/dy within the band, packed for LSODA."""
+        return steps.jacobian(t, y, self.reduction, self.law, self.band)
 
-    def margin(self, t: float, y: np.ndarray) -> float:
-        """The contact's margin in units of its floors: below -1 it must change."""
-        return float(steps.contact_margin(t, y, self.reduction, *self.margin_scales))
+    def step_end(self, t: float, y: np.ndarray) -> tuple[float, np.ndarray]:
+        """The contact's margin in its floors' units (below -1 it must change); slip rates."""
+        margin, speeds = steps.step_end(t, y, self.reduction, self.law, *self.margin_scales)
+        return float(margin), speeds
 
     def change_time(self, within: Callable[[float], np.ndarray], begin: float,
                     end: float) -> float:
         """When the contact's margin crosses its floor in a step (interpolant ``within``)."""
-        return float(brentq(lambda t: self.margin(t, within(t)) + 1.0, begin, end,
+        return float(brentq(lambda t: self.step_end(t, within(t))[0] + 1.0, begin, end,
                             xtol=1e-12))
-
-    def speeds(self, t: float, y: np.ndarray) -> np.ndarray:
-        """The closed nodes' slip rates."""
-        return steps.closed_speeds(t, y, self.reduction, self.law)
 
     def readouts(self, times: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """The readouts (T, N, sensors per width), dx and dy at each time."""
-        return steps.readouts(times, ys, self.reduction)
+        return steps.readouts(times, ys, self.reduction, self.law)
 
 
 def simulate_quasi_dynamic(
@@ -438,21 +447,24 @@ def simulate_quasi_dynamic(
     smallest_dc = min(dc for _, dc in states(law)) * MM_PER_M
     normal_w = drive.normal_load / body.width
     u, dy, closed = _approach(body, normal_w)
-    y = np.concatenate([u[:n]] + [np.full(n, math.log(drive.initial_age))] * state_count)
+    stride = 1 + state_count
+    y = np.full(n * stride, math.log(drive.initial_age))
+    y[::stride] = u[:n]
     flat = _flat_row(drive, dy, body.width)
     contact = _reduce(body, closed, flat)
     record = _Record(_times(duration, sample_rate), _times(duration, field_rate), n,
                      contact.reduction.readouts_x.size + 2)
     scales = (tolerance * normal_w / n, tolerance * smallest_dc)
-    atol = np.concatenate([np.full(n, tolerance * smallest_dc),
-                           np.full(n * state_count, tolerance)])
+    atol = np.full(n * stride, tolerance)
+    atol[::stride] = tolerance * smallest_dc
     steps_law = _law(law)
     t, counts = 0.0, {"steps": 0, "evaluations": 0, "jacobians": 0, "contact_changes": 0}
     while t < duration:
         stretch = _Stretch(contact, steps_law, scales)
         solver = LSODA(stretch.rates, t, y, duration, rtol=tolerance, atol=atol,
-                       jac=stretch.jacobian, max_step=_MAX_STEP)
-        speeds = stretch.speeds(t, y)
+                       jac=stretch.jacobian, lband=stretch.band, uband=stretch.band,
+                       max_step=_MAX_STEP)
+        speeds = stretch.step_end(t, y)[1]
         changed = False
         while solver.status == "running":
             message = solver.step()
@@ -461,23 +473,25 @@ def simulate_quasi_dynamic(
                                     f"{solver.t:.9g} s: {message}")
             counts["steps"] += 1
             begin, end = float(solver.t_old), float(solver.t)
-            if stretch.margin(end, solver.y) < -1.0:
+            margin, after = stretch.step_end(end, solver.y)
+            if margin < -1.0:
                 # the contact changes in this step: where its margin crosses the floor
                 within = solver.dense_output()
                 end = stretch.change_time(within, begin, end)
                 changed = True
                 y = within(end)
+                after = stretch.step_end(end, y)[1]
             else:
                 y = solver.y.copy()
-            speeds = record.take(stretch, body, solver.dense_output, begin, end, y, speeds,
-                                 front_speed)
-            t = end
+            record.take(stretch, body, solver.dense_output, begin, end, speeds, after,
+                        front_speed)
+            speeds, t = after, end
             if changed:
                 break
         counts["evaluations"] += int(solver.nfev)
         counts["jacobians"] += int(solver.njev)
         if changed:
-            contact = _change_contact(body, contact, y, t)
+            contact = _change_contact(body, contact, y, t, stride)
             counts["contact_changes"] += 1
     return _to_dataset(body, law, drive, record, counts, front_speed)
 
@@ -500,12 +514,12 @@ class _Record:
 
     def take(self, stretch: _Stretch, body: ContactBody,
              interpolant: Callable[[], Callable[[Any], np.ndarray]], begin: float, end: float,
-             y: np.ndarray, speeds: np.ndarray, front_speed: float) -> np.ndarray:
-        """Record what falls in a step from ``begin`` to ``end`` (state y there).
+             speeds: np.ndarray, after: np.ndarray, front_speed: float) -> None:
+        """Record what falls in a step from ``begin`` to ``end``.
 
         ``interpolant`` makes the step's interpolant, asked for only when a record time
-        falls in it; ``speeds`` are the closed nodes' slip rates at ``begin``, and those
-        at ``end`` are returned.
+        falls in it; ``speeds`` and ``after`` are the closed nodes' slip rates at the
+        step's ends.
         """
         within = None
         times = self.sample_times
@@ -513,7 +527,7 @@ class _Record:
         if stop > self.next_sample:
             within = interpolant()
             chosen = times[self.next_sample:stop]
-            values = within(chosen).reshape(y.size, chosen.size)
+            values = within(chosen).reshape(-1, chosen.size)
             self.samples[:, self.next_sample:stop] = stretch.readouts(chosen, values)
             self.next_sample = stop
         times = self.field_times
@@ -522,7 +536,6 @@ class _Record:
             at = float(times[self.next_field])
             self.fields[:, self.next_field] = _fields(stretch, body, at, within(at))
             self.next_field += 1
-        after = stretch.speeds(end, y)
         before, now = np.abs(speeds), np.abs(after)
         for k in np.flatnonzero((before < front_speed) != (now < front_speed)):
             if before[k] > 0 and now[k] > 0:
@@ -531,24 +544,23 @@ class _Record:
                 w = (front_speed - before[k]) / (now[k] - before[k])
             self.crossings.append((int(stretch.reduction.closed[k]), begin + w * (end - begin),
                                    bool(now[k] >= front_speed)))
-        return after
 
 
-def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: float
-                    ) -> _Contact:
+def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: float,
+                    stride: int) -> _Contact:
     """Open the closed nodes pulled off, close the open ones pressed in, until none is.
 
     A node that closes takes its position on the flat where it lands.
     """
     n = body.nodes
     for _ in range(_MAX_CONTACT_CHANGES):
-        u, r, gap, dx = _state_at(body, contact, t, y)
+        u, r, gap, dx = _state_at(body, contact, t, y, stride)
         closed = contact.reduction.closed
         pulled = closed[r[n + closed] < 0.0]
         pressed_in = contact.open[gap[contact.open] < 0.0]
         if not pulled.size and not pressed_in.size:
             return contact
-        y[pressed_in] = u[pressed_in] - dx
+        y[pressed_in * stride] = u[pressed_in] - dx
         closed = np.union1d(np.setdiff1d(closed, pulled), pressed_in)
         if not closed.size:
             raise SlipwaveError(f"the contact opened whole at t = {t:.9g} s")
@@ -559,13 +571,14 @@ def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: floa
 def _fields(stretch: _Stretch, body: ContactBody, t: float, y: np.ndarray) -> np.ndarray:
     """The nodes' slip rate, ln theta (the first state's), p, q and contact at state y."""
     n = body.nodes
+    stride = 1 + stretch.law.b.size
     closed = stretch.reduction.closed
-    _, r, _, _ = _state_at(body, stretch.contact, t, y)
+    _, r, _, _ = _state_at(body, stretch.contact, t, y, stride)
     speed = np.zeros(n)
-    speed[closed] = stretch.speeds(t, y)
+    speed[closed] = stretch.step_end(t, y)[1]
     contact = np.zeros(n)
     contact[closed] = 1.0
-    return np.stack([speed, y[n:2 * n], r[n:] / body.tributary, r[:n] / body.tributary,
+    return np.stack([speed, y[1::stride], r[n:] / body.tributary, r[:n] / body.tributary,
                      contact])
 
 

@@ -4,8 +4,10 @@ The contact's closed nodes are fixed over a stretch of the integration: the driv
 (:mod:`slipwave.solver.quasi_dynamic`) reduces the body onto them
 (:class:`Reduction`), and every quantity needed is then an affine map of the closed
 nodes' positions s relative to the flat (mm) and of the flat's tangential and normal
-positions dx, dy: ``M s + dx m_x + dy m_y + m_0``. The state is ``y = [s (n), ln
-theta (n per state)]``; an open node's entries are frozen.
+positions dx, dy: ``M s + dx m_x + dy m_y + m_0``. The state holds each node's s then
+its ln theta (one per state of the law), node after node (:func:`slot`), so that the
+Jacobian's entries near its diagonal are a node's own and its neighbours'; an open
+node's entries are frozen.
 
 At a closed node of normal force P and shear load tau (the elastic force that
 drives it to slip, the flat's force on it with the sign reversed), the slip rate v
@@ -17,7 +19,10 @@ balances friction and the radiation damping eta v of the waves it sheds (Rice
 solved by Newton's method (:func:`slip_speed`). The system is stiff wherever a node
 creeps under a small normal force (its relaxation time a P / (K v) falls to
 microseconds as it is about to open), so the driver integrates it implicitly with
-the analytic Jacobian (:func:`jacobian`).
+the analytic Jacobian (:func:`jacobian`), kept within a band of neighbouring nodes:
+the stiffness that sets the steps is a node's own (the condensed stiffness falls off
+with distance), and the band's factorisation costs a few hundredths of the dense
+one's at 160 elements.
 """
 
 from __future__ import annotations
@@ -123,7 +128,28 @@ def _log_add_exp(x: float, y: float) -> float:
 
 
 @njit(cache=True)
-def state_part(y: np.ndarray, node: int, n: int, law: Law) -> float:
+def slot(node: int, entry: int, law: Law) -> int:
+    """Where a node's entry is in the state: 0 its s, 1 + m its m-th ln theta.
+
+    Parameters
+    ----------
+    node
+        The node.
+    entry
+        0 for s, 1 + m for the m-th state.
+    law
+        The law (its number of states).
+
+    Returns
+    -------
+    int
+        The index in y.
+    """
+    return node * (1 + law.b.size) + entry
+
+
+@njit(cache=True)
+def state_part(y: np.ndarray, node: int, law: Law) -> float:
     """Psi at a node: mu0 plus each state's b ln(v0 theta / Dc (+ v0 / vc)).
 
     Parameters
@@ -132,8 +158,6 @@ def state_part(y: np.ndarray, node: int, n: int, law: Law) -> float:
         The state.
     node
         The node.
-    n
-        The number of nodes.
     law
         The law.
 
@@ -145,7 +169,7 @@ def state_part(y: np.ndarray, node: int, n: int, law: Law) -> float:
     psi = law.mu0
     for k in range(law.b.size):
         psi += law.b[k] * (law.log_ratio[k]
-                           + _log_add_exp(y[n * (k + 1) + node], law.cutoff_ages[k]))
+                           + _log_add_exp(y[slot(node, 1 + k, law)], law.cutoff_ages[k]))
     return psi
 
 
@@ -265,12 +289,13 @@ def speed_partials(tau: float, pressure: float, psi: float, damping: float, a: f
 @njit(cache=True)
 def _affine(M: np.ndarray, mx: np.ndarray, my: np.ndarray, m0: np.ndarray,
             s: np.ndarray, dx: float, dy: float, out: np.ndarray) -> None:
-    """``out = M s + dx mx + dy my + m0``."""
+    """``out = M s + dx mx + dy my + m0``.
+
+    The product is BLAS's: a loop does not vectorise its sums under strict floating point.
+    """
+    product = np.dot(M, s) if s.size else np.zeros(out.size)
     for i in range(out.size):
-        value = dx * mx[i] + dy * my[i] + m0[i]
-        for j in range(s.size):
-            value += M[i, j] * s[j]
-        out[i] = value
+        out[i] = product[i] + dx * mx[i] + dy * my[i] + m0[i]
 
 
 @njit(cache=True)
@@ -303,12 +328,21 @@ def flat_position(t: float, s: np.ndarray, reduction: Reduction) -> tuple[float,
 
 
 @njit(cache=True)
-def _loads(t: float, y: np.ndarray, reduction: Reduction) -> tuple[np.ndarray, float, float]:
-    """The closed nodes' ``[r_x, r_y]``, and dx, dy."""
+def _positions(y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray:
+    """The closed nodes' positions s relative to the flat."""
     closed = reduction.closed
     s = np.empty(closed.size)
     for k in range(closed.size):
-        s[k] = y[closed[k]]
+        s[k] = y[slot(closed[k], 0, law)]
+    return s
+
+
+@njit(cache=True)
+def _loads(t: float, y: np.ndarray, reduction: Reduction, law: Law
+           ) -> tuple[np.ndarray, float, float]:
+    """The closed nodes' ``[r_x, r_y]``, and dx, dy."""
+    closed = reduction.closed
+    s = _positions(y, reduction, law)
     dx, dy = flat_position(t, s, reduction)
     loads = np.empty(2 * closed.size)
     _affine(reduction.loads_M, reduction.loads_x, reduction.loads_y, reduction.loads_0, s,
@@ -336,32 +370,43 @@ def rates(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray
     numpy.ndarray
         dy/dt: the closed nodes' slip rates and state rates, zero at the open ones.
     """
-    n, closed = reduction.nodes, reduction.closed
+    closed = reduction.closed
     c = closed.size
-    loads, _, _ = _loads(t, y, reduction)
+    loads, _, _ = _loads(t, y, reduction, law)
     out = np.zeros(y.size)
     for k in range(c):
         node = closed[k]
-        psi = state_part(y, node, n, law)
+        psi = state_part(y, node, law)
         v = slip_speed(-loads[k], loads[c + k], psi, reduction.damping[node], law.a, law.v0)
-        out[node] = v
+        out[slot(node, 0, law)] = v
         for m in range(law.b.size):
-            log_theta = y[n * (m + 1) + node]
+            here = slot(node, 1 + m, law)
             rate = abs(v) / law.dc[m]
             if law.aging:
-                out[n * (m + 1) + node] = np.exp(-log_theta) - rate
+                out[here] = np.exp(-y[here]) - rate
             elif rate > 0.0:
-                out[n * (m + 1) + node] = -rate * (np.log(rate) + log_theta)
+                out[here] = -rate * (np.log(rate) + y[here])
     return out
 
 
 @njit(cache=True)
-def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray:
-    """The Jacobian of :func:`rates`, analytic.
+def _put(packed: np.ndarray, band: int, row: int, column: int, value: float) -> None:
+    """J[row, column] into the packed band, if it falls within it.
+
+    scipy's LSODA reads J[i, j] at ``[band + i - j, j]``.
+    """
+    if abs(row - column) <= band:
+        packed[band + row - column, column] = value
+
+
+@njit(cache=True)
+def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
+             ) -> np.ndarray:
+    """The Jacobian of :func:`rates`, analytic, within a band about its diagonal.
 
     The slip rate's derivatives are :func:`speed_partials`'; the loads' are the reduced
     stiffness's (with the flat's normal position following the closed nodes under
-    force control).
+    force control). Entries farther than ``band`` from the diagonal are left out.
 
     Parameters
     ----------
@@ -373,23 +418,29 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndar
         The body reduced onto its closed nodes.
     law
         The friction law.
+    band
+        The half-width kept, in entries of y.
 
     Returns
     -------
     numpy.ndarray
-        (size, size): d(dy/dt)/dy.
+        (2 band + 1, size): ``J[i, j]`` at ``[band + i - j, j]``.
     """
-    n, closed = reduction.nodes, reduction.closed
+    closed = reduction.closed
     c = closed.size
-    loads, _, _ = _loads(t, y, reduction)
+    count = law.b.size
+    loads, _, _ = _loads(t, y, reduction, law)
     M, loads_y = reduction.loads_M, reduction.loads_y
     force = reduction.flat[5] != 0.0
     normal_row, normal_y = reduction.readouts_M[_NORMAL], reduction.readouts_y[_NORMAL]
-    out = np.zeros((y.size, y.size))
+    packed = np.zeros((2 * band + 1, y.size))
+    by_slip = np.empty(c)
+    by_states = np.empty(count)
     for k in range(c):
         node = closed[k]
+        row = slot(node, 0, law)
         tau, pressure = -loads[k], loads[c + k]
-        psi = state_part(y, node, n, law)
+        psi = state_part(y, node, law)
         eta = reduction.damping[node]
         v = slip_speed(tau, pressure, psi, eta, law.a, law.v0)
         v_tau, v_p, v_psi = speed_partials(tau, pressure, psi, eta, law.a, law.v0, v)
@@ -399,36 +450,38 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndar
                 d_dy = -normal_row[j] / normal_y
                 d_shear += loads_y[k] * d_dy
                 d_normal += loads_y[c + k] * d_dy
-            out[node, closed[j]] = -v_tau * d_shear + v_p * d_normal
-        for m in range(law.b.size):
+            by_slip[j] = -v_tau * d_shear + v_p * d_normal
+            _put(packed, band, row, slot(closed[j], 0, law), by_slip[j])
+        for m in range(count):
             # d psi / d ln theta: the cut-off's logaddexp weighs the state's share
-            log_theta = y[n * (m + 1) + node]
+            log_theta = y[slot(node, 1 + m, law)]
             share = 1.0 if law.cutoff_ages[m] == -np.inf else 1.0 / (
                 1.0 + np.exp(law.cutoff_ages[m] - log_theta))
-            out[node, n * (m + 1) + node] = v_psi * law.b[m] * share
+            by_states[m] = v_psi * law.b[m] * share
+            _put(packed, band, row, slot(node, 1 + m, law), by_states[m])
         sign = 1.0 if v >= 0.0 else -1.0
-        for m in range(law.b.size):
-            row = n * (m + 1) + node
-            log_theta = y[row]
+        for m in range(count):
+            here = slot(node, 1 + m, law)
             rate = abs(v) / law.dc[m]
             if law.aging:
-                by_speed, by_state = -sign / law.dc[m], -np.exp(-log_theta)
+                by_speed, by_state = -sign / law.dc[m], -np.exp(-y[here])
             elif rate > 0.0:
-                by_speed = -sign / law.dc[m] * (np.log(rate) + log_theta + 1.0)
+                by_speed = -sign / law.dc[m] * (np.log(rate) + y[here] + 1.0)
                 by_state = -rate
             else:
                 by_speed, by_state = 0.0, 0.0
             for j in range(c):
-                out[row, closed[j]] = by_speed * out[node, closed[j]]
-            for m2 in range(law.b.size):
-                column = n * (m2 + 1) + node
-                out[row, column] = by_speed * out[node, column] + (by_state if m2 == m else 0.0)
-    return out
+                _put(packed, band, here, slot(closed[j], 0, law), by_speed * by_slip[j])
+            for m2 in range(count):
+                _put(packed, band, here, slot(node, 1 + m2, law),
+                     by_speed * by_states[m2] + (by_state if m2 == m else 0.0))
+    return packed
 
 
 @njit(cache=True)
-def closed_speeds(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray:
-    """The closed nodes' slip rates.
+def step_end(t: float, y: np.ndarray, reduction: Reduction, law: Law, force_scale: float,
+             gap_scale: float) -> tuple[float, np.ndarray]:
+    """What the driver reads at a step's end: the contact's margin, the slip rates.
 
     Parameters
     ----------
@@ -440,63 +493,37 @@ def closed_speeds(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np
         The body reduced onto its closed nodes.
     law
         The friction law.
-
-    Returns
-    -------
-    numpy.ndarray
-        One per closed node, in ``reduction.closed``'s order.
-    """
-    n, closed = reduction.nodes, reduction.closed
-    c = closed.size
-    loads, _, _ = _loads(t, y, reduction)
-    speeds = np.empty(c)
-    for k in range(c):
-        speeds[k] = slip_speed(-loads[k], loads[c + k], state_part(y, closed[k], n, law),
-                               reduction.damping[closed[k]], law.a, law.v0)
-    return speeds
-
-
-@njit(cache=True)
-def contact_margin(t: float, y: np.ndarray, reduction: Reduction, force_scale: float,
-                   gap_scale: float) -> float:
-    """The smallest of the closed nodes' normal forces and the open nodes' gaps, scaled.
-
-    Parameters
-    ----------
-    t
-        The time.
-    y
-        The state.
-    reduction
-        The body reduced onto its closed nodes.
     force_scale, gap_scale
-        The force and the gap that count as 1.
+        The normal force and the gap that count as 1 in the margin.
 
     Returns
     -------
-    float
-        Negative where the contact must change: its root is when it does.
+    tuple
+        The smallest of the closed nodes' normal forces and the open nodes' gaps, scaled
+        (negative where the contact must change: its root is when it does); the closed
+        nodes' slip rates, in ``reduction.closed``'s order.
     """
     closed = reduction.closed
     c = closed.size
-    loads, dx, dy = _loads(t, y, reduction)
+    loads, dx, dy = _loads(t, y, reduction, law)
     margin = np.inf
+    speeds = np.empty(c)
     for k in range(c):
         margin = min(margin, loads[c + k] / force_scale)
+        speeds[k] = slip_speed(-loads[k], loads[c + k], state_part(y, closed[k], law),
+                               reduction.damping[closed[k]], law.a, law.v0)
     if reduction.gaps_x.size:
-        s = np.empty(c)
-        for k in range(c):
-            s[k] = y[closed[k]]
         gaps = np.empty(reduction.gaps_x.size)
-        _affine(reduction.gaps_M, reduction.gaps_x, reduction.gaps_y, reduction.gaps_0, s,
-                dx, dy, gaps)
+        _affine(reduction.gaps_M, reduction.gaps_x, reduction.gaps_y, reduction.gaps_0,
+                _positions(y, reduction, law), dx, dy, gaps)
         for k in range(gaps.size):
             margin = min(margin, gaps[k] / gap_scale)
-    return margin
+    return margin, speeds
 
 
 @njit(cache=True)
-def readouts(times: np.ndarray, ys: np.ndarray, reduction: Reduction) -> np.ndarray:
+def readouts(times: np.ndarray, ys: np.ndarray, reduction: Reduction, law: Law
+             ) -> np.ndarray:
     """The readouts, then dx and dy, at each time.
 
     Parameters
@@ -507,6 +534,8 @@ def readouts(times: np.ndarray, ys: np.ndarray, reduction: Reduction) -> np.ndar
         (size, times): the state at each.
     reduction
         The body reduced onto its closed nodes.
+    law
+        The law (the state's layout).
 
     Returns
     -------
@@ -521,7 +550,7 @@ def readouts(times: np.ndarray, ys: np.ndarray, reduction: Reduction) -> np.ndar
     values = np.empty(count)
     for m in range(times.size):
         for k in range(c):
-            s[k] = ys[closed[k], m]
+            s[k] = ys[slot(closed[k], 0, law), m]
         dx, dy = flat_position(times[m], s, reduction)
         _affine(reduction.readouts_M, reduction.readouts_x, reduction.readouts_y,
                 reduction.readouts_0, s, dx, dy, values)
