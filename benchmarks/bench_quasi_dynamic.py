@@ -125,8 +125,8 @@ def figure(ds: xr.Dataset, elements: int) -> None:
 def main() -> None:
     print(f"quasi-dynamic: load average {os.getloadavg()[0]:.2f} before")
     start = time.process_time()  # the compiled kernels, loaded (or compiled) once
-    simulate_quasi_dynamic(slab_body(Slab(elements=40)), LAW, DRIVE, duration=1.0,
-                           sample_rate=1.0)
+    simulate_quasi_dynamic(slab_body(Slab(elements=40)), LAW, DRIVE, duration=50.0,
+                           sample_rate=100.0, field_rate=10.0)
     print(f"quasi-dynamic: the kernels loaded and a first run in {time.process_time() - start:.1f}"
           f" s")
     one_node()
@@ -143,10 +143,20 @@ def main() -> None:
         ratio = (ds["T"] / ds["N"]).values
         medians[elements] = float(waves["speed"].median())
         spacing = 80.0 / elements
+        times = ds["time"].values
+        # each wave's drop: T/N just before it less its least in the 0.15 s after
+        drops = [float(ratio[(times > start - 0.05) & (times <= start)].max()
+                       - ratio[(times > start) & (times <= start + 0.15)].min())
+                 for start in waves["t_start"]]
         print(f"quasi-dynamic: {elements} elements ({spacing:.2f} mm), 70 s in {seconds:.1f} "
               f"s ({ds.attrs['steps']} steps, {ds.attrs['jacobians']} Jacobians, "
               f"{ds.attrs['contact_changes']} contact changes): {len(waves)} waves, median "
-              f"front speed {medians[elements]:.0f} mm/s, largest T/N {ratio.max():.4f}")
+              f"front speed {medians[elements]:.0f} mm/s; first wave at "
+              f"{waves['t_start'].iloc[0]:.3f} s, median start x "
+              f"{waves['x_start'].median():.2f} mm, recurrence "
+              f"{np.median(np.diff(waves['t_start'])):.3f} s, median drop of T/N "
+              f"{np.median(drops):.4f}, median extent {waves['extent'].median():.3f}, "
+              f"largest T/N {ratio.max():.4f}")
         if elements == 160:
             figure(ds, elements)
         for wave in waves.itertuples():
