@@ -12,7 +12,7 @@ node's entries are frozen.
 At a closed node of normal force P and shear load tau (the elastic force that
 drives it to slip, the flat's force on it with the sign reversed), the slip rate v
 balances friction and the radiation damping eta v of the waves it sheds (Rice
-1993):
+1993)::
 
     |tau| = P a asinh(|v| exp(psi / a) / (2 v0)) + eta |v|,  sign(v) = sign(tau),
 
@@ -180,7 +180,7 @@ def law_friction(log_scaled: float, a: float) -> float:
     Parameters
     ----------
     log_scaled
-        ln X, X = |v| exp(psi / a) / (2 v0).
+        ln X, X = abs(v) exp(psi / a) / (2 v0).
     a
         The direct effect.
 
@@ -199,7 +199,7 @@ def slip_speed(tau: float, pressure: float, psi: float, damping: float, a: float
                v0: float) -> float:
     """The slip rate at which friction and radiation damping carry a shear load.
 
-    Newton's method on ln|v|, where the balance is convex: from the smaller of two
+    Newton's method on ln abs(v), where the balance is convex: from the smaller of two
     upper bounds (the undamped rate, the damping's alone) it falls to the root without
     overshooting. Everything is formed in logarithms, so that psi / a may be in the
     hundreds (a slab's friction near 1 with a of a few thousandths).
@@ -254,8 +254,8 @@ def speed_partials(tau: float, pressure: float, psi: float, damping: float, a: f
     """The slip rate's derivatives in tau, P and psi, at the balance's root.
 
     From the implicit function: with F_v = P a / sqrt(v^2 + (2 v0 exp(-psi/a))^2) + eta
-    (the balance's slope in |v|), dv/dtau = 1 / F_v, dv/dP = -sign(tau) mu / F_v and
-    dv/dpsi = -sign(tau) P X / (sqrt(1 + X^2) F_v), X = |v| exp(psi/a) / (2 v0).
+    (the balance's slope in abs(v)), dv/dtau = 1 / F_v, dv/dP = -sign(tau) mu / F_v and
+    dv/dpsi = -sign(tau) P X / (sqrt(1 + X^2) F_v), X = abs(v) exp(psi/a) / (2 v0).
 
     Parameters
     ----------
