@@ -34,17 +34,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 import xarray as xr
-from scipy.integrate import LSODA
 from scipy.optimize import brentq
 
 from slipwave import __version__
 from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
 from slipwave.solver import quasi_dynamic_steps as steps
+from slipwave.solver import stiff_steps
 from slipwave.solver.cache import SolverCache
 from slipwave.solver.rate_state import RateState, cutoff_log_ages, states
 from slipwave.solver.slab import Slab, condense
@@ -72,8 +72,9 @@ _MAX_STEP = 0.1  # s: the longest step, so that a change of contact is looked fo
 JACOBIAN_BAND_NODES = 8
 """The Jacobian the steps factorise keeps each node's coupling to this many neighbours on
 either side: the stiffness that sets the steps is local, and a band of 8 gave the same
-slips and front speeds as the whole Jacobian at 160 elements in a sixth of LSODA's own
-time (a Newton matrix with entries left out costs iterations, never accuracy)."""
+slips and front speeds as the whole Jacobian at 160 elements, its factorisation a sixth of
+the dense one's time (a Newton matrix with entries left out costs iterations, never
+accuracy)."""
 
 
 @dataclass(frozen=True)
@@ -358,7 +359,7 @@ class _Stretch:
         return steps.rates(t, y, self.reduction, self.law)
 
     def jacobian(self, t: float, y: np.ndarray) -> np.ndarray:
-        """d(dy/dt)/dy within the band, packed for LSODA."""
+        """d(dy/dt)/dy within the band, packed (:mod:`slipwave.solver.stiff_steps`)."""
         return steps.jacobian(t, y, self.reduction, self.law, self.band)
 
     def step_end(self, t: float, y: np.ndarray) -> tuple[float, np.ndarray]:
@@ -390,12 +391,12 @@ def simulate_quasi_dynamic(
 ) -> xr.Dataset:
     """Press the flat on the body, then drive it: the contact's response in real time.
 
-    The time steps are scipy's LSODA (Adams while the contact is calm, BDF while it is
-    stiff) with the analytic Jacobian, one integration per stretch of unchanged
-    contact: a step that ends with a closed node pulled off or an open node pressed in
-    beyond the floors (``tolerance`` times the mean nodal force, and times the smallest
-    Dc) is cut where the change happened (a root of its interpolant), the contact
-    changed there, and the integration started again.
+    The time steps are scipy's BDF compiled (:mod:`slipwave.solver.stiff_steps`) with the
+    analytic Jacobian, one integration per stretch of unchanged contact: a step that
+    ends with a closed node pulled off or an open node pressed in beyond the floors
+    (``tolerance`` times the mean nodal force, and times the smallest Dc) is cut where
+    the change happened (a root of its interpolant), the contact changed there, and the
+    integration started again.
 
     Parameters
     ----------
@@ -458,38 +459,40 @@ def simulate_quasi_dynamic(
     atol = np.full(n * stride, tolerance)
     atol[::stride] = tolerance * smallest_dc
     steps_law = _law(law)
-    t, counts = 0.0, {"steps": 0, "evaluations": 0, "jacobians": 0, "contact_changes": 0}
+    t, counts = 0.0, {"steps": 0, "evaluations": 0, "jacobians": 0, "factorisations": 0,
+                      "contact_changes": 0}
     while t < duration:
         stretch = _Stretch(contact, steps_law, scales)
-        solver = LSODA(stretch.rates, t, y, duration, rtol=tolerance, atol=atol,
-                       jac=stretch.jacobian, lband=stretch.band, uband=stretch.band,
-                       max_step=_MAX_STEP)
+        stepper = stiff_steps.start(t, y, duration, tolerance, atol, _MAX_STEP,
+                                    stretch.reduction, steps_law, stretch.band)
         speeds = stretch.step_end(t, y)[1]
         changed = False
-        while solver.status == "running":
-            message = solver.step()
-            if solver.status == "failed":
-                raise SlipwaveError(f"the quasi-dynamic integration failed at t = "
-                                    f"{solver.t:.9g} s: {message}")
-            counts["steps"] += 1
-            begin, end = float(solver.t_old), float(solver.t)
-            margin, after = stretch.step_end(end, solver.y)
+        while t < duration:
+            if stiff_steps.step(stepper, stretch.reduction, steps_law,
+                                stretch.band) != stiff_steps.OK:
+                raise SlipwaveError(f"the quasi-dynamic steps fell below the smallest at "
+                                    f"t = {t:.9g} s")
+            begin = float(stepper.scalars[stiff_steps.T_OLD])
+            end = float(stepper.scalars[stiff_steps.T])
+            within = _Interpolant(stepper)
+            margin, after = stretch.step_end(end, stepper.D[0])
             if margin < -1.0:
                 # the contact changes in this step: where its margin crosses the floor
-                within = solver.dense_output()
                 end = stretch.change_time(within, begin, end)
                 changed = True
                 y = within(end)
                 after = stretch.step_end(end, y)[1]
             else:
-                y = solver.y.copy()
-            record.take(stretch, body, solver.dense_output, begin, end, speeds, after,
-                        front_speed)
+                y = stepper.D[0].copy()
+            record.take(stretch, body, within, begin, end, speeds, after, front_speed)
             speeds, t = after, end
             if changed:
                 break
-        counts["evaluations"] += int(solver.nfev)
-        counts["jacobians"] += int(solver.njev)
+        for name, index in (("steps", stiff_steps.STEPS),
+                            ("evaluations", stiff_steps.EVALUATIONS),
+                            ("jacobians", stiff_steps.JACOBIANS),
+                            ("factorisations", stiff_steps.FACTORISATIONS)):
+            counts[name] += int(stepper.counts[index])
         if changed:
             contact = _change_contact(body, contact, y, t, stride)
             counts["contact_changes"] += 1
@@ -499,6 +502,19 @@ def simulate_quasi_dynamic(
 def _times(duration: float, rate: float) -> np.ndarray:
     """Record times from 0 to the duration at a rate."""
     return np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
+
+
+class _Interpolant:
+    """The last step's interpolant: a state at a time, or a column per time."""
+
+    def __init__(self, stepper: stiff_steps.Stepper) -> None:
+        self.stepper = stepper
+
+    def __call__(self, times: float | np.ndarray) -> np.ndarray:
+        """The state at a time (size,), or at each of an array of times (size, times)."""
+        values = stiff_steps.interpolate(self.stepper, np.atleast_1d(np.asarray(
+            times, dtype=float)))
+        return values[:, 0] if np.ndim(times) == 0 else values
 
 
 class _Record:
@@ -512,27 +528,22 @@ class _Record:
         self.next_sample = self.next_field = 0
         self.crossings: list[tuple[int, float, bool]] = []
 
-    def take(self, stretch: _Stretch, body: ContactBody,
-             interpolant: Callable[[], Callable[[Any], np.ndarray]], begin: float, end: float,
-             speeds: np.ndarray, after: np.ndarray, front_speed: float) -> None:
-        """Record what falls in a step from ``begin`` to ``end``.
+    def take(self, stretch: _Stretch, body: ContactBody, within: _Interpolant,
+             begin: float, end: float, speeds: np.ndarray, after: np.ndarray,
+             front_speed: float) -> None:
+        """Record what falls in a step from ``begin`` to ``end`` (its interpolant ``within``).
 
-        ``interpolant`` makes the step's interpolant, asked for only when a record time
-        falls in it; ``speeds`` and ``after`` are the closed nodes' slip rates at the
-        step's ends.
+        ``speeds`` and ``after`` are the closed nodes' slip rates at the step's ends.
         """
-        within = None
         times = self.sample_times
         stop = int(np.searchsorted(times, end, side="right"))
         if stop > self.next_sample:
-            within = interpolant()
             chosen = times[self.next_sample:stop]
             values = within(chosen).reshape(-1, chosen.size)
             self.samples[:, self.next_sample:stop] = stretch.readouts(chosen, values)
             self.next_sample = stop
         times = self.field_times
         while self.next_field < times.size and times[self.next_field] <= end:
-            within = interpolant() if within is None else within
             at = float(times[self.next_field])
             self.fields[:, self.next_field] = _fields(stretch, body, at, within(at))
             self.next_field += 1

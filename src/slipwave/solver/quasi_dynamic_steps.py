@@ -393,10 +393,10 @@ def rates(t: float, y: np.ndarray, reduction: Reduction, law: Law) -> np.ndarray
 def _put(packed: np.ndarray, band: int, row: int, column: int, value: float) -> None:
     """J[row, column] into the packed band, if it falls within it.
 
-    scipy's LSODA reads J[i, j] at ``[band + i - j, j]``.
+    At ``[column, band + row - column]``, so that a column is contiguous.
     """
     if abs(row - column) <= band:
-        packed[band + row - column, column] = value
+        packed[column, band + row - column] = value
 
 
 @njit(cache=True)
@@ -424,7 +424,7 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
     Returns
     -------
     numpy.ndarray
-        (2 band + 1, size): ``J[i, j]`` at ``[band + i - j, j]``.
+        (size, 2 band + 1): ``J[i, j]`` at ``[j, band + i - j]``.
     """
     closed = reduction.closed
     c = closed.size
@@ -433,7 +433,7 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
     M, loads_y = reduction.loads_M, reduction.loads_y
     force = reduction.flat[5] != 0.0
     normal_row, normal_y = reduction.readouts_M[_NORMAL], reduction.readouts_y[_NORMAL]
-    packed = np.zeros((2 * band + 1, y.size))
+    packed = np.zeros((y.size, 2 * band + 1))
     by_slip = np.empty(c)
     by_states = np.empty(count)
     for k in range(c):

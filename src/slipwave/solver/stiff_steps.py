@@ -1,0 +1,413 @@
+"""Compiled implicit steps for the quasi-dynamic contact: scipy's BDF, in numba, banded.
+
+scipy's ``BDF`` (variable order 1 to 5, the numerical differentiation formulas of
+Shampine and Reichelt 1997, quasi-constant step size; Byrne and Hindmarsh 1975) ported
+to numba, its Newton matrix ``I - c J`` kept within the band of
+:func:`slipwave.solver.quasi_dynamic_steps.jacobian` and factorised by Gaussian
+elimination with partial pivoting in band storage (LAPACK's ``dgbtf2`` and ``dgbtrs``),
+a step's Python gone. One change to scipy's algorithm: the Jacobian is taken again when
+the Newton matrix's c has moved by 30 % from the one it was taken for, or after 20 steps
+(LSODE's rule). scipy keeps it until Newton fails, and within a step keeps the one
+taken for a longer try: on a spring-slider that one, taken where the try predicted a
+fast slip, made the corrections small without the equation holding, and a step passed
+over the slip's onset (T/N off by 0.0125; scipy's own ``BDF`` does the same there). The
+interpolant is scipy's (:func:`interpolate`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from slipwave.solver.quasi_dynamic_steps import Law, Reduction, jacobian, rates
+
+MAX_ORDER = 5
+_NEWTON_ITERATIONS = 4
+_MIN_FACTOR, _MAX_FACTOR = 0.2, 10.0
+_KAPPA = np.array([0.0, -0.1850, -1.0 / 9.0, -0.0823, -0.0415, 0.0])
+_GAMMA = np.concatenate((np.zeros(1), np.cumsum(1.0 / np.arange(1, MAX_ORDER + 1))))
+_ALPHA = (1.0 - _KAPPA) * _GAMMA
+_ERROR_CONSTANT = _KAPPA * _GAMMA + 1.0 / np.arange(1, MAX_ORDER + 2)
+
+OK, TOO_SMALL = 0, 1
+"""What :func:`step` returns: a step taken; the step fell below the smallest."""
+
+T, T_OLD = 0, 4
+"""The places of the time and of the last step's start in ``Stepper.scalars``."""
+_T, _H, _ORDER, _EQUAL, _T_OLD, _LU_VALID, _JAC_C, _MAX_STEP, _BOUND, _RTOL, \
+    _NEWTON_TOL, _JAC_AGE = range(12)
+_JAC_CHANGE = 0.3  # LSODE's CCMAX: a step's c this far from the Jacobian's takes a new one
+_JAC_STEPS = 20  # LSODE's MSBP: steps after which a Jacobian is taken again
+# the counters' places in Stepper.counts
+STEPS, EVALUATIONS, JACOBIANS, FACTORISATIONS = range(4)
+
+
+class Stepper(NamedTuple):
+    """A BDF integration's state (arrays the steps update in place).
+
+    Attributes
+    ----------
+    D
+        (MAX_ORDER + 3, size): the backward differences; ``D[0]`` is the state.
+    J
+        The Jacobian in band storage (:func:`~slipwave.solver.quasi_dynamic_steps.jacobian`).
+    LU
+        (size, 3 band + 1): the factorised Newton matrix, LAPACK's band storage
+        transposed.
+    pivots
+        (size,): its row interchanges.
+    scalars
+        t, the step, the order, the equal steps taken, the last step's start, whether
+        LU is valid, the c that J was taken for, the longest step, the end, rtol, Newton's
+        tolerance, the steps since J was taken.
+    atol
+        (size,): the absolute tolerances.
+    counts
+        Steps, evaluations of the right-hand side, Jacobians, factorisations.
+    """
+
+    D: np.ndarray
+    J: np.ndarray
+    LU: np.ndarray
+    pivots: np.ndarray
+    scalars: np.ndarray
+    atol: np.ndarray
+    counts: np.ndarray
+
+
+@njit(cache=True)
+def _norm(x: np.ndarray) -> float:
+    """The RMS norm, scipy's."""
+    return np.sqrt(np.sum(x * x) / x.size)
+
+
+@njit(cache=True)
+def _compute_r(order: int, factor: float) -> np.ndarray:
+    """The matrix that changes the differences for a step scaled by ``factor``."""
+    M = np.zeros((order + 1, order + 1))
+    for i in range(1, order + 1):
+        for j in range(1, order + 1):
+            M[i, j] = (i - 1 - factor * j) / i
+    M[0, :] = 1.0
+    for i in range(1, order + 1):  # cumulative product down the columns
+        for j in range(order + 1):
+            M[i, j] *= M[i - 1, j]
+    return M
+
+
+@njit(cache=True)
+def _change_d(D: np.ndarray, order: int, factor: float) -> None:
+    """Rescale the differences for a step scaled by ``factor``, in place."""
+    RU = _compute_r(order, factor) @ _compute_r(order, 1.0)
+    changed = RU.T @ D[:order + 1]
+    D[:order + 1] = changed
+
+
+@njit(cache=True)
+def _factorise(J: np.ndarray, c: float, band: int, LU: np.ndarray, pivots: np.ndarray
+               ) -> None:
+    """LU with partial pivoting of ``I - c J`` (J packed within ``band``), band storage.
+
+    LAPACK's ``dgbtf2`` with its band storage transposed, so that a column is
+    contiguous: A[i, j] at ``LU[j, 2 band + i - j]``, the first ``band`` places of each
+    column for the fill-in of the interchanges.
+    """
+    n = J.shape[0]
+    kl = ku = band
+    kv = kl + ku
+    LU[:, :] = 0.0
+    for j in range(n):
+        for d in range(-band, band + 1):  # row i = j + d
+            if 0 <= j + d < n:
+                LU[j, kv + d] = -c * J[j, band + d]
+        LU[j, kv] += 1.0
+    ju = 0
+    for j in range(n):
+        km = min(kl, n - 1 - j)
+        best, jp = -1.0, 0
+        for k in range(km + 1):
+            value = abs(LU[j, kv + k])
+            if value > best:
+                best, jp = value, k
+        pivots[j] = j + jp
+        if LU[j, kv + jp] != 0.0:
+            ju = max(ju, min(j + ku + jp, n - 1))
+            if jp != 0:
+                for col in range(j, ju + 1):
+                    a, b = kv + j + jp - col, kv + j - col
+                    LU[col, a], LU[col, b] = LU[col, b], LU[col, a]
+            pivot = LU[j, kv]
+            for k in range(1, km + 1):
+                LU[j, kv + k] /= pivot
+            for col in range(j + 1, ju + 1):
+                upper = LU[col, kv + j - col]
+                if upper != 0.0:
+                    offset = kv + j - col
+                    for k in range(1, km + 1):
+                        LU[col, offset + k] -= LU[j, kv + k] * upper
+
+
+@njit(cache=True)
+def _solve(LU: np.ndarray, pivots: np.ndarray, band: int, b: np.ndarray) -> np.ndarray:
+    """Solve with :func:`_factorise`'s factors (LAPACK's ``dgbtrs``)."""
+    n = b.size
+    kl = band
+    kv = 2 * band
+    x = b.copy()
+    for j in range(n - 1):
+        km = min(kl, n - 1 - j)
+        p = pivots[j]
+        if p != j:
+            x[p], x[j] = x[j], x[p]
+        xj = x[j]
+        for k in range(1, km + 1):
+            x[j + k] -= LU[j, kv + k] * xj
+    for j in range(n - 1, -1, -1):
+        x[j] /= LU[j, kv]
+        xj = x[j]
+        for i in range(max(0, j - kv), j):
+            x[i] -= LU[j, kv + i - j] * xj
+    return x
+
+
+@njit(cache=True)
+def start(t0: float, y0: np.ndarray, t_bound: float, rtol: float, atol: np.ndarray,
+          max_step: float, reduction: Reduction, law: Law, band: int) -> Stepper:
+    """A stepper at ``(t0, y0)``, its first step chosen as scipy's ``select_initial_step``.
+
+    Parameters
+    ----------
+    t0, y0
+        The start.
+    t_bound
+        The end: no step goes beyond it.
+    rtol, atol
+        The tolerances.
+    max_step
+        The longest step.
+    reduction, law
+        The contact (:func:`~slipwave.solver.quasi_dynamic_steps.rates`).
+    band
+        The Jacobian's half-width.
+
+    Returns
+    -------
+    Stepper
+        At order 1, the Jacobian evaluated.
+    """
+    size = y0.size
+    f0 = rates(t0, y0, reduction, law)
+    scale = atol + np.abs(y0) * rtol
+    d0, d1 = _norm(y0 / scale), _norm(f0 / scale)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, t_bound - t0)
+    f1 = rates(t0 + h0, y0 + h0 * f0, reduction, law)
+    d2 = _norm((f1 - f0) / scale) / h0
+    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (
+        0.01 / max(d1, d2)) ** 0.5
+    h = min(100 * h0, h1, t_bound - t0, max_step)
+    D = np.zeros((MAX_ORDER + 3, size))
+    D[0] = y0
+    D[1] = f0 * h
+    scalars = np.array([t0, h, 1.0, 0.0, t0, 0.0, np.inf, max_step, t_bound, rtol,
+                        max(10 * np.finfo(np.float64).eps / rtol, min(0.03, rtol ** 0.5)),
+                        0.0])
+    counts = np.zeros(4, dtype=np.int64)
+    counts[EVALUATIONS] = 2
+    counts[JACOBIANS] = 1
+    return Stepper(D, jacobian(t0, y0, reduction, law, band), np.zeros((size, 3 * band + 1)),
+                   np.zeros(size, dtype=np.int64), scalars, atol, counts)
+
+
+@njit(cache=True)
+def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
+    """One BDF step, as scipy's ``BDF._step_impl``.
+
+    Parameters
+    ----------
+    s
+        The stepper, updated in place.
+    reduction, law
+        The contact.
+    band
+        The Jacobian's half-width.
+
+    Returns
+    -------
+    int
+        :data:`OK`, or :data:`TOO_SMALL` when the step fell below ten times the spacing
+        of doubles at t.
+    """
+    D, sc = s.D, s.scalars
+    t = sc[_T]
+    order = int(sc[_ORDER])
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    h_abs = sc[_H]
+    lu_valid = sc[_LU_VALID] != 0.0
+    if h_abs > sc[_MAX_STEP]:
+        _change_d(D, order, sc[_MAX_STEP] / h_abs)
+        h_abs = sc[_MAX_STEP]
+        sc[_EQUAL] = 0
+        lu_valid = False
+    elif h_abs < min_step:
+        _change_d(D, order, min_step / h_abs)
+        h_abs = min_step
+        sc[_EQUAL] = 0
+        lu_valid = False
+    rtol, atol = sc[_RTOL], s.atol
+    current_jac = False
+    while True:
+        if h_abs < min_step:
+            return TOO_SMALL
+        t_new = t + h_abs
+        if t_new > sc[_BOUND]:
+            t_new = sc[_BOUND]
+            _change_d(D, order, (t_new - t) / h_abs)
+            sc[_EQUAL] = 0
+            lu_valid = False
+        h = t_new - t
+        h_abs = h
+        y_predict = D[0].copy()
+        for i in range(1, order + 1):
+            y_predict += D[i]
+        scale = atol + rtol * np.abs(y_predict)
+        psi = np.zeros(y_predict.size)
+        for i in range(1, order + 1):
+            psi += D[i] * _GAMMA[i]
+        psi /= _ALPHA[order]
+        c = h / _ALPHA[order]
+        # scipy keeps a Jacobian until Newton fails, and within a step it keeps the one
+        # taken for a longer try: one taken where the try predicted a fast slip then
+        # makes the corrections small without the equation holding, and a step passes
+        # over a slip's onset. LSODE's rule: a new one when c has moved by 30 % from
+        # the Jacobian's, or after 20 steps.
+        if abs(c / sc[_JAC_C] - 1.0) > _JAC_CHANGE or sc[_JAC_AGE] >= _JAC_STEPS:
+            s.J[:, :] = jacobian(t_new, y_predict, reduction, law, band)
+            s.counts[JACOBIANS] += 1
+            sc[_JAC_C], sc[_JAC_AGE] = c, 0.0
+            lu_valid = False
+            current_jac = True
+        converged = False
+        while not converged:
+            if not lu_valid:
+                _factorise(s.J, c, band, s.LU, s.pivots)
+                s.counts[FACTORISATIONS] += 1
+                lu_valid = True
+            converged, iterations, y_new, d = _newton(s, reduction, law, band, t_new,
+                                                     y_predict, c, psi, scale)
+            if not converged:
+                if current_jac:
+                    break
+                s.J[:, :] = jacobian(t_new, y_predict, reduction, law, band)
+                s.counts[JACOBIANS] += 1
+                sc[_JAC_C], sc[_JAC_AGE] = c, 0.0
+                lu_valid = False
+                current_jac = True
+        if not converged:
+            h_abs *= 0.5
+            _change_d(D, order, 0.5)
+            sc[_EQUAL] = 0
+            lu_valid = False
+            continue
+        safety = 0.9 * (2 * _NEWTON_ITERATIONS + 1) / (2 * _NEWTON_ITERATIONS + iterations)
+        scale = atol + rtol * np.abs(y_new)
+        error_norm = _norm(_ERROR_CONSTANT[order] * d / scale)
+        if error_norm > 1:
+            factor = max(_MIN_FACTOR, safety * error_norm ** (-1.0 / (order + 1)))
+            h_abs *= factor
+            _change_d(D, order, factor)
+            sc[_EQUAL] = 0
+            lu_valid = False  # scipy keeps it; its c has changed
+            continue
+        break
+    s.counts[STEPS] += 1
+    sc[_JAC_AGE] += 1
+    sc[_EQUAL] += 1
+    sc[_T_OLD] = t
+    sc[_T] = t_new
+    sc[_H] = h_abs
+    D[order + 2] = d - D[order + 1]
+    D[order + 1] = d
+    for i in range(order, -1, -1):
+        D[i] += D[i + 1]
+    sc[_LU_VALID] = 1.0 if lu_valid else 0.0
+    if sc[_EQUAL] < order + 1:
+        return OK
+    error_m = _norm(_ERROR_CONSTANT[order - 1] * D[order] / scale) if order > 1 else np.inf
+    error_p = (_norm(_ERROR_CONSTANT[order + 1] * D[order + 2] / scale)
+               if order < MAX_ORDER else np.inf)
+    factors = np.empty(3)
+    for k, norm in enumerate((error_m, error_norm, error_p)):
+        factors[k] = np.inf if norm == 0.0 else norm ** (-1.0 / (order + k))
+    order += int(np.argmax(factors)) - 1
+    sc[_ORDER] = order
+    factor = min(_MAX_FACTOR, safety * np.max(factors))
+    sc[_H] = h_abs * factor
+    _change_d(D, order, factor)
+    sc[_EQUAL] = 0
+    sc[_LU_VALID] = 0.0
+    return OK
+
+
+@njit(cache=True)
+def _newton(s: Stepper, reduction: Reduction, law: Law, band: int, t_new: float,
+            y_predict: np.ndarray, c: float, psi: np.ndarray, scale: np.ndarray
+            ) -> tuple[bool, int, np.ndarray, np.ndarray]:
+    """The implicit equation by simplified Newton (scipy's ``solve_bdf_system``)."""
+    tol = s.scalars[_NEWTON_TOL]
+    d = np.zeros(y_predict.size)
+    y = y_predict.copy()
+    norm_old = -1.0
+    converged = False
+    k = 0
+    for k in range(_NEWTON_ITERATIONS):
+        f = rates(t_new, y, reduction, law)
+        s.counts[EVALUATIONS] += 1
+        if not np.all(np.isfinite(f)):
+            break
+        dy = _solve(s.LU, s.pivots, band, c * f - psi - d)
+        norm = _norm(dy / scale)
+        rate = -1.0 if norm_old < 0 else norm / norm_old
+        if rate >= 0 and (rate >= 1 or rate ** (_NEWTON_ITERATIONS - k) / (1 - rate) * norm
+                          > tol):
+            break
+        y += dy
+        d += dy
+        if norm == 0 or (rate >= 0 and rate / (1 - rate) * norm < tol):
+            converged = True
+            break
+        norm_old = norm
+    return converged, k + 1, y, d
+
+
+@njit(cache=True)
+def interpolate(s: Stepper, times: np.ndarray) -> np.ndarray:
+    """The last step's interpolant at these times (scipy's ``BdfDenseOutput``).
+
+    Parameters
+    ----------
+    s
+        The stepper, after a step.
+    times
+        Times within the last step.
+
+    Returns
+    -------
+    numpy.ndarray
+        (size, times).
+    """
+    sc, D = s.scalars, s.D
+    order = int(sc[_ORDER])
+    h = sc[_H]
+    t = sc[_T]
+    out = np.empty((D.shape[1], times.size))
+    for m in range(times.size):
+        value = D[0].copy()
+        p = 1.0
+        for i in range(order):
+            p *= (times[m] - (t - h * i)) / (h * (1 + i))
+            value += D[i + 1] * p
+        out[:, m] = value
+    return out
