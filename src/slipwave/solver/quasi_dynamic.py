@@ -249,6 +249,19 @@ def _affine(rows: np.ndarray, closed_gap: np.ndarray
             -normal @ closed_gap)
 
 
+def _condense_onto(K: np.ndarray, kept: np.ndarray, free: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The free unknowns in terms of the kept ones (no load on them), and the Schur complement.
+
+    Returns ``response`` (``u_free = response @ u_kept``) and the kept unknowns'
+    stiffness with the free ones eliminated.
+    """
+    if not free.size:
+        return np.zeros((0, kept.size)), K[np.ix_(kept, kept)].copy()
+    response = -np.linalg.solve(K[np.ix_(free, free)], K[np.ix_(free, kept)])
+    return response, K[np.ix_(kept, kept)] + K[np.ix_(kept, free)] @ response
+
+
 def _reduce(body: ContactBody, closed: np.ndarray, flat: np.ndarray) -> _Contact:
     """The body reduced onto a set of closed nodes (the open ones carry no load)."""
     n = body.nodes
@@ -257,13 +270,7 @@ def _reduce(body: ContactBody, closed: np.ndarray, flat: np.ndarray) -> _Contact
     open_ = np.flatnonzero(~is_closed)
     kept = np.concatenate([closed, n + closed])
     free = np.concatenate([open_, n + open_])
-    K = body.stiffness
-    if free.size:
-        response = -np.linalg.solve(K[np.ix_(free, free)], K[np.ix_(free, kept)])
-        schur = K[np.ix_(kept, kept)] + K[np.ix_(kept, free)] @ response
-    else:
-        response = np.zeros((0, kept.size))
-        schur = K[np.ix_(kept, kept)].copy()
+    response, schur = _condense_onto(body.stiffness, kept, free)
     c, o = closed.size, open_.size
     g0 = body.initial_gap
     gaps_M, gaps_x, gaps_y, gaps_0 = _affine(response[o:], g0[closed])
@@ -287,8 +294,7 @@ def _approach(body: ContactBody, normal_load: float) -> tuple[np.ndarray, float,
     for _ in range(n + _MAX_CONTACT_CHANGES):
         kept = n + closed
         free = np.setdiff1d(np.arange(2 * n), kept)
-        response = -np.linalg.solve(K[np.ix_(free, free)], K[np.ix_(free, kept)])
-        schur = K[np.ix_(kept, kept)] + K[np.ix_(kept, free)] @ response
+        response, schur = _condense_onto(K, kept, free)
         dy = (normal_load + schur.sum(axis=0) @ g0[closed]) / schur.sum()
         u = np.zeros(2 * n)
         u[kept] = dy - g0[closed]

@@ -34,9 +34,8 @@ _ERROR_CONSTANT = _KAPPA * _GAMMA + 1.0 / np.arange(1, MAX_ORDER + 2)
 OK, TOO_SMALL = 0, 1
 """What :func:`step` returns: a step taken; the step fell below the smallest."""
 
-T, T_OLD = 0, 4
-"""The places of the time and of the last step's start in ``Stepper.scalars``."""
-_T, _H, _ORDER, _EQUAL, _T_OLD, _LU_VALID, _JAC_C, _MAX_STEP, _BOUND, _RTOL, \
+# the places in Stepper.scalars; the time's and the last step's start's are read outside
+T, _H, _ORDER, _EQUAL, T_OLD, _LU_VALID, _JAC_C, _MAX_STEP, _BOUND, _RTOL, \
     _NEWTON_TOL, _JAC_AGE = range(12)
 _JAC_CHANGE = 0.3  # LSODE's CCMAX: a step's c this far from the Jacobian's takes a new one
 _JAC_STEPS = 20  # LSODE's MSBP: steps after which a Jacobian is taken again
@@ -241,7 +240,7 @@ def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
         of doubles at t.
     """
     D, sc = s.D, s.scalars
-    t = sc[_T]
+    t = sc[T]
     order = int(sc[_ORDER])
     min_step = 10 * abs(np.nextafter(t, np.inf) - t)
     h_abs = sc[_H]
@@ -325,8 +324,8 @@ def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
     s.counts[STEPS] += 1
     sc[_JAC_AGE] += 1
     sc[_EQUAL] += 1
-    sc[_T_OLD] = t
-    sc[_T] = t_new
+    sc[T_OLD] = t
+    sc[T] = t_new
     sc[_H] = h_abs
     D[order + 2] = d - D[order + 1]
     D[order + 1] = d
@@ -401,7 +400,7 @@ def interpolate(s: Stepper, times: np.ndarray) -> np.ndarray:
     sc, D = s.scalars, s.D
     order = int(sc[_ORDER])
     h = sc[_H]
-    t = sc[_T]
+    t = sc[T]
     out = np.empty((D.shape[1], times.size))
     for m in range(times.size):
         value = D[0].copy()
