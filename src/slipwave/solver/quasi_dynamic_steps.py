@@ -233,7 +233,16 @@ def slip_speed(tau: float, pressure: float, psi: float, damping: float, a: float
     # the undamped rate 2 v0 exp(-psi/a) sinh(ratio)
     log_speed = np.log(v0) + ratio - psi / a + np.log(-np.expm1(-2.0 * ratio))
     if damping > 0.0 and log_speed > -_NEGLIGIBLE_LOG:
-        log_speed = min(log_speed, np.log(load / damping))
+        bound = np.log(load / damping)  # the rate at which damping alone carries the load
+        if log_speed < bound:
+            # Newton's first change from the undamped rate, where friction carries the
+            # load: below the tolerance (a node that sticks or creeps) it is the root
+            speed = np.exp(log_speed)
+            log_scaled = log_speed + psi / a - np.log(2.0 * v0)
+            slope = pressure * a / np.sqrt(1.0 + np.exp(-2.0 * log_scaled)) + damping * speed
+            if damping * speed <= _NEWTON_TOLERANCE * slope:
+                return speed if tau > 0.0 else -speed
+        log_speed = min(log_speed, bound)
         offset = psi / a - np.log(2.0 * v0)
         for _ in range(_NEWTON_ITERATIONS):
             log_scaled = log_speed + offset
@@ -444,7 +453,9 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
         eta = reduction.damping[node]
         v = slip_speed(tau, pressure, psi, eta, law.a, law.v0)
         v_tau, v_p, v_psi = speed_partials(tau, pressure, psi, eta, law.a, law.v0, v)
-        for j in range(c):
+        # closed nodes are distinct and ascending: beyond band places in closed, beyond band in y
+        near = range(max(0, k - band), min(c, k + band + 1))
+        for j in near:
             d_shear, d_normal = M[k, j], M[c + k, j]
             if force:  # the flat's normal position follows the closed nodes' positions
                 d_dy = -normal_row[j] / normal_y
@@ -470,7 +481,7 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
                 by_state = -rate
             else:
                 by_speed, by_state = 0.0, 0.0
-            for j in range(c):
+            for j in near:
                 _put(packed, band, here, slot(closed[j], 0, law), by_speed * by_slip[j])
             for m2 in range(count):
                 _put(packed, band, here, slot(node, 1 + m2, law),
