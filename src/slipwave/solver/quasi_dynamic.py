@@ -44,6 +44,7 @@ from slipwave import __version__
 from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
 from slipwave.solver import quasi_dynamic_steps as steps
+from slipwave.solver import quasi_dynamic_stretch as stretch_steps
 from slipwave.solver import stiff_steps
 from slipwave.solver.cache import SolverCache
 from slipwave.solver.rate_state import RateState, cutoff_log_ages, states
@@ -59,7 +60,7 @@ INITIAL_AGE = 10.0
 """The contacts' age when the tangential drive starts, s: the state theta after the
 normal loading, which on the bench takes seconds."""
 
-TOLERANCE = 1e-6
+TOLERANCE = 1e-5
 """The steps' tolerance: on s in units of the smallest Dc, on ln theta, and relative."""
 
 FRONT_SPEED_RATIO = 10.0
@@ -68,6 +69,7 @@ the drive's speed."""
 
 _MAX_CONTACT_CHANGES = 100  # changes of the closed set at one instant before giving up
 _MAX_STEP = 0.1  # s: the longest step, so that a change of contact is looked for often
+_CROSSINGS_BUFFER = 64  # crossings held per node before the compiled steps hand them over
 
 JACOBIAN_BAND_NODES = 8
 """The Jacobian the steps factorise keeps each node's coupling to this many neighbours on
@@ -471,27 +473,29 @@ def simulate_quasi_dynamic(
         stretch = _Stretch(contact, steps_law, scales)
         stepper = stiff_steps.start(t, y, duration, tolerance, atol, _MAX_STEP,
                                     stretch.reduction, steps_law, stretch.band)
-        speeds = stretch.step_end(t, y)[1]
+        taken = record.start(stretch.step_end(t, y)[1])
         changed = False
         while t < duration:
-            if stiff_steps.step(stepper, stretch.reduction, steps_law,
-                                stretch.band) != stiff_steps.OK:
+            status = stretch_steps.advance(stepper, stretch.reduction, steps_law,
+                                           stretch.band, *scales, record.next_field_time(),
+                                           front_speed, taken)
+            if status == stretch_steps.TOO_SMALL:
                 raise SlipwaveError(f"the quasi-dynamic steps fell below the smallest at "
-                                    f"t = {t:.9g} s")
-            begin = float(stepper.scalars[stiff_steps.T_OLD])
-            end = float(stepper.scalars[stiff_steps.T])
+                                    f"t = {stepper.scalars[stiff_steps.T]:.9g} s")
             within = _Interpolant(stepper)
-            margin, after = stretch.step_end(end, stepper.D[0])
-            if margin < -1.0:
+            if status == stretch_steps.CHANGES:
                 # the contact changes in this step: where its margin crosses the floor
-                end = stretch.change_time(within, begin, end)
+                begin = float(stepper.scalars[stiff_steps.T_OLD])
+                t = stretch.change_time(within, begin, float(stepper.scalars[stiff_steps.T]))
+                y = within(t)
+                stretch_steps.record_step(stepper, stretch.reduction, steps_law, begin, t,
+                                          stretch.step_end(t, y)[1], front_speed, taken)
                 changed = True
-                y = within(end)
-                after = stretch.step_end(end, y)[1]
             else:
+                t = float(stepper.scalars[stiff_steps.T])
                 y = stepper.D[0].copy()
-            record.take(stretch, body, within, begin, end, speeds, after, front_speed)
-            speeds, t = after, end
+            record.take_fields(stretch, body, within, t)
+            record.drain()
             if changed:
                 break
         for name, index in (("steps", stiff_steps.STEPS),
@@ -524,43 +528,61 @@ class _Interpolant:
 
 
 class _Record:
-    """What a run records: the readouts, the fields and the fronts' crossings."""
+    """What a run records: the readouts and crossings (by the compiled steps), the fields."""
 
     def __init__(self, sample_times: np.ndarray, field_times: np.ndarray, nodes: int,
                  readouts: int) -> None:
         self.sample_times, self.field_times = sample_times, field_times
-        self.samples = np.full((readouts, sample_times.size), np.nan)
         self.fields = np.zeros((5, field_times.size, nodes))
-        self.next_sample = self.next_field = 0
-        self.crossings: list[tuple[int, float, bool]] = []
+        self.next_field = 0
+        buffer = _CROSSINGS_BUFFER * nodes
+        self.steps_record = stretch_steps.Record(
+            sample_times, np.full((readouts, sample_times.size), np.nan),
+            np.zeros(buffer, dtype=np.int64), np.zeros(buffer),
+            np.zeros(buffer, dtype=np.bool_), np.zeros(2, dtype=np.int64), np.zeros(0))
+        self.crossings: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
-    def take(self, stretch: _Stretch, body: ContactBody, within: _Interpolant,
-             begin: float, end: float, speeds: np.ndarray, after: np.ndarray,
-             front_speed: float) -> None:
-        """Record what falls in a step from ``begin`` to ``end`` (its interpolant ``within``).
+    @property
+    def samples(self) -> np.ndarray:
+        """(readouts + 2, sample_times): the readouts, dx and dy."""
+        return self.steps_record.samples
 
-        ``speeds`` and ``after`` are the closed nodes' slip rates at the step's ends.
-        """
-        times = self.sample_times
-        stop = int(np.searchsorted(times, end, side="right"))
-        if stop > self.next_sample:
-            chosen = times[self.next_sample:stop]
-            values = within(chosen).reshape(-1, chosen.size)
-            self.samples[:, self.next_sample:stop] = stretch.readouts(chosen, values)
-            self.next_sample = stop
+    def start(self, speeds: np.ndarray) -> stretch_steps.Record:
+        """The record the compiled steps fill over a stretch whose slip rates start at these."""
+        self.steps_record = self.steps_record._replace(speeds=speeds)
+        return self.steps_record
+
+    def next_field_time(self) -> float:
+        """The next field time to record, or infinity when all are."""
+        return (float(self.field_times[self.next_field])
+                if self.next_field < self.field_times.size else math.inf)
+
+    def take_fields(self, stretch: _Stretch, body: ContactBody, within: _Interpolant,
+                    end: float) -> None:
+        """Record the fields at the field times up to ``end`` (within the last step)."""
         times = self.field_times
         while self.next_field < times.size and times[self.next_field] <= end:
             at = float(times[self.next_field])
             self.fields[:, self.next_field] = _fields(stretch, body, at, within(at))
             self.next_field += 1
-        before, now = np.abs(speeds), np.abs(after)
-        for k in np.flatnonzero((before < front_speed) != (now < front_speed)):
-            if before[k] > 0 and now[k] > 0:
-                w = math.log(front_speed / before[k]) / math.log(now[k] / before[k])
-            else:
-                w = (front_speed - before[k]) / (now[k] - before[k])
-            self.crossings.append((int(stretch.reduction.closed[k]), begin + w * (end - begin),
-                                   bool(now[k] >= front_speed)))
+
+    def drain(self) -> None:
+        """Move the crossings out of the compiled steps' buffer."""
+        held = self.steps_record
+        count = int(held.cursor[stretch_steps.CROSSINGS])
+        if count:
+            self.crossings.append((held.crossing_node[:count].copy(),
+                                   held.crossing_time[:count].copy(),
+                                   held.crossing_rising[:count].copy()))
+            held.cursor[stretch_steps.CROSSINGS] = 0
+
+    def crossing_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every crossing's node, time and whether the rate rises, in time order."""
+        if not self.crossings:
+            return np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=bool)
+        return (np.concatenate([node for node, _, _ in self.crossings]),
+                np.concatenate([time for _, time, _ in self.crossings]),
+                np.concatenate([rising for _, _, rising in self.crossings]))
 
 
 def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: float,
@@ -604,9 +626,7 @@ def _to_dataset(body: ContactBody, law: RateState, drive: Drive, record: _Record
     """The record as a dataset with CF attributes."""
     width = body.width
     samples, fields = record.samples, record.fields
-    crossing_node = np.array([node for node, _, _ in record.crossings], dtype=np.int64)
-    crossing_time = np.array([time for _, time, _ in record.crossings])
-    crossing_rising = np.array([rising for _, _, rising in record.crossings], dtype=bool)
+    crossing_node, crossing_time, crossing_rising = record.crossing_arrays()
     names = ["T", "N"] + (["DG", "DD"] if body.sensors.shape[0] == 2 else
                           [f"sensor_{k}" for k in range(body.sensors.shape[0])])
     data: dict[str, tuple] = {}

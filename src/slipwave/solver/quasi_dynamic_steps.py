@@ -121,9 +121,9 @@ _NORMAL = 1  # the readouts' row that sums the normal load
 @njit(cache=True)
 def _log_add_exp(x: float, y: float) -> float:
     """ln(e^x + e^y), with y = -inf for a law without a cut-off."""
+    if y == -np.inf:  # no cut-off: the common case, without its two transcendentals
+        return x
     m = max(x, y)
-    if m == -np.inf:
-        return m
     return m + np.log1p(np.exp(-abs(x - y)))
 
 
@@ -230,29 +230,43 @@ def slip_speed(tau: float, pressure: float, psi: float, damping: float, a: float
     if pressure <= 0.0:
         return tau / damping
     ratio = load / (pressure * a)
-    # the undamped rate 2 v0 exp(-psi/a) sinh(ratio)
-    log_speed = np.log(v0) + ratio - psi / a + np.log(-np.expm1(-2.0 * ratio))
-    if damping > 0.0 and log_speed > -_NEGLIGIBLE_LOG:
-        bound = np.log(load / damping)  # the rate at which damping alone carries the load
-        if log_speed < bound:
-            # Newton's first change from the undamped rate, where friction carries the
-            # load: below the tolerance (a node that sticks or creeps) it is the root
-            speed = np.exp(log_speed)
-            log_scaled = log_speed + psi / a - np.log(2.0 * v0)
-            slope = pressure * a / np.sqrt(1.0 + np.exp(-2.0 * log_scaled)) + damping * speed
-            if damping * speed <= _NEWTON_TOLERANCE * slope:
-                return speed if tau > 0.0 else -speed
-        log_speed = min(log_speed, bound)
-        offset = psi / a - np.log(2.0 * v0)
-        for _ in range(_NEWTON_ITERATIONS):
-            log_scaled = log_speed + offset
-            speed = np.exp(log_speed)
-            excess = pressure * law_friction(log_scaled, a) + damping * speed - load
-            slope = pressure * a / np.sqrt(1.0 + np.exp(-2.0 * log_scaled)) + damping * speed
-            change = excess / slope
-            log_speed -= change
-            if abs(change) <= _NEWTON_TOLERANCE:
-                break
+    exponent = ratio - psi / a  # the undamped rate 2 v0 exp(-psi/a) sinh(ratio), in parts
+    log_speed = np.log(v0) + exponent + np.log(-np.expm1(-2.0 * ratio))
+    if damping == 0.0 or log_speed <= -_NEGLIGIBLE_LOG:
+        return np.exp(log_speed) if tau > 0.0 else -np.exp(log_speed)
+    bound = np.log(load / damping)  # the rate at which damping alone carries the load
+    if log_speed < bound:
+        # Newton's first change from the undamped rate (where friction alone carries the
+        # load) is eta v / (P a tanh(ratio) + eta v), taken here; below the tolerance (a
+        # node that sticks or creeps) the undamped rate is the root
+        speed = np.exp(log_speed)
+        carried = damping * speed
+        change = carried / (pressure * a * np.tanh(ratio) + carried)
+        if change <= _NEWTON_TOLERANCE:
+            return speed if tau > 0.0 else -speed
+        log_speed -= change
+    else:
+        log_speed = bound
+    offset = psi / a - np.log(2.0 * v0)  # ln X = ln |v| + offset
+    for _ in range(_NEWTON_ITERATIONS):
+        log_scaled = log_speed + offset
+        speed = np.exp(log_speed)
+        if log_scaled > 0.0:  # a asinh(X) and its slope X / sqrt(1 + X^2), X large
+            root = np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
+            friction = a * (log_scaled + np.log1p(root))
+            share = 1.0 / root
+        else:
+            scaled = np.exp(log_scaled)
+            root = np.sqrt(1.0 + scaled * scaled)
+            friction = a * np.arcsinh(scaled)
+            share = scaled / root
+        change = (pressure * friction + damping * speed - load) / (
+            pressure * a * share + damping * speed)
+        log_speed -= change
+        # the balance's second derivative in ln|v| is at most its first, so the error
+        # left is at most half the change's square
+        if change * change <= 2.0 * _NEWTON_TOLERANCE:
+            break
     speed = np.exp(log_speed)
     return speed if tau > 0.0 else -speed
 
