@@ -11,8 +11,11 @@ polyurethane's radiation damping (density 1200 kg/m^3, shear waves at 44 m/s).
    elements; each wave's front speed (Theil-Sen on the side it runs to), start and
    drop; the median front speed at each mesh. Target: within 5 % between the mesh used
    and twice it.
+   The same against the steps' tolerance: the default against ten times tighter, at 160
+   elements. Target: within 5 %.
 3. Time: a 280 s test on one core at 80 and 160 elements. Target: <= 10 s at the mesh
-   whose front speed has converged; where the time goes (cProfile, at 160 elements).
+   whose front speed has converged; where the time goes (each compiled kernel's calls
+   per step, and its time per call at a stuck state and in a wave).
 4. A figure of the 160-element run for the documentation (T/N, where the contact slips
    against time, one wave's arrivals): docs/_static/quasi_dynamic_waves.png.
 
@@ -27,12 +30,11 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import cProfile
 import itertools
 import math
-import pstats
 import time
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -40,9 +42,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from numba import njit, objmode
 
+from slipwave.solver import quasi_dynamic_steps as steps
+from slipwave.solver import quasi_dynamic_stretch as stretch_steps
+from slipwave.solver import stiff_steps
 from slipwave.solver.fronts import front_waves, slip_intervals
 from slipwave.solver.quasi_dynamic import (
+    TOLERANCE,
     Drive,
     shear_impedance,
     simulate_quasi_dynamic,
@@ -122,6 +129,93 @@ def figure(ds: xr.Dataset, elements: int) -> None:
     print(f"quasi-dynamic: figure {FIGURE.relative_to(FIGURE.parents[2])}")
 
 
+def tolerances() -> None:
+    """The front speed against the steps' tolerance, at 160 elements over 70 s."""
+    medians = {}
+    for tolerance in (TOLERANCE, TOLERANCE / 10):
+        body = slab_body(Slab(elements=160))
+        start = time.process_time()
+        ds = simulate_quasi_dynamic(body, LAW, DRIVE, duration=70.0, sample_rate=100.0,
+                                    field_rate=10.0, tolerance=tolerance)
+        seconds = time.process_time() - start
+        medians[tolerance] = float(front_waves(ds, min_extent=MIN_EXTENT)["speed"].median())
+        print(f"quasi-dynamic: tolerance {tolerance:g}: 70 s at 160 elements in {seconds:.1f} s"
+              f", {ds.attrs['steps']} steps, median front speed {medians[tolerance]:.0f} mm/s")
+    change = abs(medians[TOLERANCE] - medians[TOLERANCE / 10]) / medians[TOLERANCE / 10]
+    status = check("front speed, tolerance / 10", change, CONVERGENCE_TARGET, at_least=False)
+    print(f"quasi-dynamic: the front speed moves {100 * change:.1f} % with a tolerance ten times"
+          f" tighter ({status} the 5 % target)")
+
+
+@njit
+def _kernel_times(y: np.ndarray, reduction: steps.Reduction, law: steps.Law, band: int,
+                  repeats: int) -> np.ndarray:
+    """Seconds per call of each kernel of a step, at state y (compiled: no dispatch)."""
+    size = y.size
+    LU = np.zeros((size, 3 * band + 1))
+    pivots = np.zeros(size, dtype=np.int64)
+    packed = steps.jacobian(0.0, y, reduction, law, band)
+    times = np.zeros(5)
+    for kernel in range(5):
+        with objmode(begin="f8"):
+            begin = time.perf_counter()
+        for _ in range(repeats):
+            if kernel == 0:
+                steps.rates(0.0, y, reduction, law)
+            elif kernel == 1:
+                steps.jacobian(0.0, y, reduction, law, band)
+            elif kernel == 2:
+                stiff_steps._factorise(packed, 1e-4, band, LU, pivots)
+            elif kernel == 3:
+                stiff_steps._solve(LU, pivots, band, y)
+            else:
+                steps.step_end(0.0, y, reduction, law, 1e-9, 1e-9)
+        with objmode(end="f8"):
+            end = time.perf_counter()
+        times[kernel] = (end - begin) / repeats
+    return times
+
+
+def where_the_time_goes() -> None:
+    """A 280 s test's steps at 160 elements: each kernel's calls per step and time per call.
+
+    The kernels are timed at two states of a run: all stuck after the pressing, and in a
+    wave (the first step whose fastest node passes 30 mm/s).
+    """
+    caught: dict[str, Any] = {}
+    advance = stretch_steps.advance
+
+    def watched(stepper: Any, reduction: Any, law: Any, band: int, *rest: Any) -> int:
+        status = advance(stepper, reduction, law, band, *rest)
+        speeds = rest[-1].speeds
+        if "y" not in caught and speeds.size and np.abs(speeds).max() > 30.0:
+            caught.update(y=stepper.D[0].copy(), reduction=reduction, law=law, band=band)
+        if "stuck" not in caught:
+            caught["stuck"] = (stepper.D[0].copy(), reduction)
+        return status
+
+    body = slab_body(Slab(elements=160))
+    stretch_steps.advance = watched  # type: ignore[assignment]  # watched for two states
+    try:
+        ds = simulate_quasi_dynamic(body, LAW, DRIVE, duration=60.0, sample_rate=100.0,
+                                    field_rate=1000.0)
+    finally:
+        stretch_steps.advance = advance
+    names = ("right-hand side", "Jacobian", "factorisation", "solve", "step's end")
+    per_step = (ds.attrs["evaluations"], ds.attrs["jacobians"], ds.attrs["factorisations"],
+                ds.attrs["evaluations"], ds.attrs["steps"])
+    stuck_y, stuck_reduction = caught["stuck"]
+    slipping = _kernel_times(caught["y"], caught["reduction"], caught["law"], caught["band"],
+                             200)
+    stuck = _kernel_times(stuck_y, stuck_reduction, caught["law"], caught["band"], 200)
+    print(f"quasi-dynamic: where the steps' time goes (60 s at 160 elements, "
+          f"{ds.attrs['steps']} steps; kernels timed stuck / in a wave):")
+    for name, calls, quiet, busy in zip(names, per_step, stuck, slipping, strict=True):
+        share = calls / ds.attrs["steps"]
+        print(f"    {name}: {share:.2f} per step, {1e6 * quiet:.0f} / {1e6 * busy:.0f} us a call"
+              f" ({1e6 * share * quiet:.0f} / {1e6 * share * busy:.0f} us per step)")
+
+
 def main() -> None:
     print(f"quasi-dynamic: load average {os.getloadavg()[0]:.2f} before")
     start = time.process_time()  # the compiled kernels, loaded (or compiled) once
@@ -185,26 +279,8 @@ def main() -> None:
             verdict = f" ({status} the {TIME_TARGET:.0f} s target)"
         print(f"quasi-dynamic: 280 s test at {elements} elements: {seconds:.1f} s"
               f"{verdict}, {ds.attrs['steps']} steps, {len(waves)} waves")
-    profile = cProfile.Profile()
-    body = slab_body(Slab(elements=160))
-    profile.enable()
-    simulate_quasi_dynamic(body, LAW, DRIVE, duration=70.0, sample_rate=100.0,
-                           field_rate=10.0)
-    profile.disable()
-    stats = pstats.Stats(profile).stats  # type: ignore[attr-defined]
-    total = sum(entry[2] for entry in stats.values())
-    shares: dict[str, float] = {}
-    for (filename, _, name), entry in stats.items():
-        key = (f"{name} (compiled: the BDF steps, their evaluations and factorisations)"
-               if filename.endswith("stiff_steps.py") else
-               f"{name} (compiled)" if filename.endswith("quasi_dynamic_steps.py") else None)
-        if key is not None:
-            shares[key] = shares.get(key, 0.0) + entry[2]
-    print("quasi-dynamic: where 70 s at 160 elements goes (cProfile, own time):")
-    for key, seconds in sorted(shares.items(), key=lambda item: -item[1]):
-        print(f"    {key}: {100 * seconds / total:.0f} %")
-    print(f"    the rest (Python: the driver, the records): "
-          f"{100 * (1 - sum(shares.values()) / total):.0f} %")
+    tolerances()
+    where_the_time_goes()
     finish()
 
 

@@ -381,10 +381,6 @@ class _Stretch:
         return float(brentq(lambda t: self.step_end(t, within(t))[0] + 1.0, begin, end,
                             xtol=1e-12))
 
-    def readouts(self, times: np.ndarray, ys: np.ndarray) -> np.ndarray:
-        """The readouts (T, N, sensors per width), dx and dy at each time."""
-        return steps.readouts(times, ys, self.reduction, self.law)
-
 
 def simulate_quasi_dynamic(
     body: ContactBody,

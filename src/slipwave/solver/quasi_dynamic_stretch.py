@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from slipwave.solver.quasi_dynamic_steps import Law, Reduction, readouts, step_end
-from slipwave.solver.stiff_steps import OK, T, T_OLD, Stepper, interpolate, step
+from slipwave.solver.stiff_steps import OK, T_OLD, Stepper, T, interpolate, step
 
 PASSED, CHANGES, FULL, TOO_SMALL = range(4)
 """What :func:`advance` returns: the time it was to pass is passed (or the end); the
