@@ -13,7 +13,9 @@ from slipwave.compare import (
     EVENT_FEATURES,
     ORIGIN,
     SCATTER_STEP,
+    WAVE_FEATURES,
     compare_test,
+    compare_waves,
     event_features,
     first_wave,
     place_on_map,
@@ -205,3 +207,47 @@ def test_place_on_map_picks_the_nearest_case():
     behaviour_map["mesh_band"] = (("height_ratio", "friction"), np.array([[0, 1], [0, 0]]))
     assert not place_on_map(behaviour_map, 0.3, 0.6)["in_mesh_band"]
     assert place_on_map(behaviour_map, 0.3, 0.9)["in_mesh_band"]
+
+
+def _waves(speeds: np.ndarray, *, kinds: list[str] | None = None, start: float = 38.0,
+           direction: str = "right_to_left") -> pd.DataFrame:
+    return pd.DataFrame({"speed": speeds, "x_start": start, "direction": direction,
+                         "kind": kinds if kinds is not None else ["partial"] * len(speeds)})
+
+
+def test_wave_speeds_from_one_law_agree_as_often_as_their_standard_errors_say() -> None:
+    rng = np.random.default_rng(37)
+    agree = {"wave speed (median)": 0, "wave speed (interquartile range)": 0}
+    draws = 400
+    for _ in range(draws):
+        table = compare_waves(_waves(rng.normal(220.0, 30.0, 30)),
+                              _waves(rng.normal(220.0, 30.0, 30)))
+        for feature in agree:
+            agree[feature] += table.set_index("feature").loc[feature, "verdict"] == "agrees"
+    # twice the standard error: about 95 % of same-law pairs agree
+    assert 0.9 <= agree["wave speed (median)"] / draws <= 0.99
+    assert 0.9 <= agree["wave speed (interquartile range)"] / draws <= 0.995
+
+
+def test_waves_forty_times_faster_differ_and_the_rest_is_read_row_by_row() -> None:
+    rng = np.random.default_rng(1)
+    video = _waves(rng.normal(220.0, 30.0, 12), kinds=["gross"] * 12)
+    simulated = _waves(rng.normal(6000.0, 900.0, 9), kinds=["partial"] * 9, start=-13.0,
+                       direction="left_to_right")
+    table = compare_waves(video, simulated).set_index("feature")
+    assert list(table.index) == list(WAVE_FEATURES)
+    assert table.loc["wave speed (median)", "verdict"] == "differs"
+    assert table.loc["first wave: where it began", "verdict"] == "differs"
+    assert table.loc["first wave: the way it ran", "verdict"] == "differs"
+    assert table.loc["waves that sweep the whole contact (share)", "measured"] == 1.0
+    assert table.loc["waves that sweep the whole contact (share)", "verdict"] == "differs"
+    same = compare_waves(video, video).set_index("feature")
+    assert (same["verdict"] == "agrees").all()
+
+
+def test_waves_without_a_speed_are_not_compared() -> None:
+    video = _waves(np.array([np.nan]), kinds=["unresolved"])
+    table = compare_waves(video, _waves(np.array([6000.0, 6100.0]))).set_index("feature")
+    assert table.loc["wave speed (median)", "verdict"] == "not compared"
+    assert table.loc["first wave: where it began", "verdict"] == "not compared"
+    assert table.loc["waves that sweep the whole contact (share)", "verdict"] == "agrees"

@@ -343,6 +343,119 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
     return table
 
 
+MEDIAN_ERROR = 0.929
+"""The standard error of a sample's median, times the square root of its size, over its
+interquartile range (1.2533 sigma / 1.349 sigma, for a normal sample)."""
+
+QUARTILES_ERROR = 1.166
+"""The same for its interquartile range (1.573 sigma / 1.349 sigma)."""
+
+WAVE_SPEED = Feature("wave speed (median)", "mm/s", 0.0)
+WAVE_SPEED_SPREAD = Feature("wave speed (interquartile range)", "mm/s", 0.0)
+FIRST_WAVE_START = Feature("first wave: where it began", "mm", ORIGIN.tolerance)
+WHOLE_CONTACT = Feature("waves that sweep the whole contact (share)", "1", 0.0)
+WAVE_FEATURES = (WAVE_SPEED.name, WAVE_SPEED_SPREAD.name, FIRST_WAVE_START.name,
+                 "first wave: the way it ran", WHOLE_CONTACT.name)
+"""The rows of :func:`compare_waves`, in order."""
+
+
+def _sampled_row(feature: Feature, measured: np.ndarray, simulated: np.ndarray,
+                 statistic: str) -> dict[str, Any]:
+    """A statistic of two samples of waves, within twice its standard error.
+
+    ``statistic`` is ``median`` or ``quartiles`` (the interquartile range); each
+    side's standard error is its :data:`MEDIAN_ERROR` or :data:`QUARTILES_ERROR` times
+    its interquartile range over the root of its size, joined in quadrature.
+    """
+    factor = MEDIAN_ERROR if statistic == "median" else QUARTILES_ERROR
+    values, errors = [], []
+    for sample in (measured, simulated):
+        sample = sample[np.isfinite(sample)]
+        if sample.size < 2:
+            values.append(float(np.median(sample)) if sample.size and statistic == "median"
+                          else float("nan"))
+            errors.append(float("nan"))
+            continue
+        quartiles = float(np.subtract(*np.percentile(sample, [75, 25])))
+        values.append(float(np.median(sample)) if statistic == "median" else quartiles)
+        errors.append(factor * quartiles / np.sqrt(sample.size))
+    row = _row(feature, values[0], values[1], 0.0,
+               unknown="fewer than two waves with a speed" if statistic != "median"
+               else "no wave with a speed")
+    tolerance = 2.0 * float(np.hypot(*errors))
+    row["tolerance"] = tolerance
+    if row["verdict"] != "not compared":
+        if not np.isfinite(tolerance):
+            row.update(verdict="not compared", note="fewer than two waves on a side")
+        else:
+            row["verdict"] = "agrees" if abs(row["difference"]) <= tolerance else "differs"
+    return row
+
+
+def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFrame:
+    """The video's waves against a simulation's, one row per feature.
+
+    Both tables are in :data:`slipwave.io.tables.WAVE_COLUMNS` (the video's
+    :func:`slipwave.video.track_waves`, a quasi-dynamic simulation's
+    :func:`slipwave.solver.fronts.front_waves`). The wave speed's median and
+    interquartile range agree when they differ by at most twice their standard error
+    from the two samples (:data:`MEDIAN_ERROR`, :data:`QUARTILES_ERROR`); the first
+    wave's start within the video's origin tolerance (:data:`ORIGIN`), its way when the
+    same; the share of waves that sweep the whole contact (``kind`` gross) within twice
+    its binomial standard error from both samples.
+
+    Parameters
+    ----------
+    measured
+        The video's waves.
+    simulated
+        The simulated waves.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`COMPARISON_COLUMNS`, the rows :data:`WAVE_FEATURES`.
+
+    Examples
+    --------
+    >>> video = pd.DataFrame({"speed": [200.0, 230.0, 210.0, 250.0], "x_start": 38.0,
+    ...                       "direction": "right_to_left",
+    ...                       "kind": ["partial", "gross", "partial", "gross"]})
+    >>> simulated = video.assign(speed=[6000.0, 6500.0, 5800.0, 7000.0])
+    >>> compare_waves(video, simulated).set_index("feature")["verdict"].tolist()
+    ['differs', 'agrees', 'agrees', 'agrees', 'agrees']
+    """
+    resolved = [table[table["kind"] != "unresolved"] for table in (measured, simulated)]
+    speeds = [table["speed"].to_numpy(dtype=float) for table in resolved]
+    rows = [_sampled_row(WAVE_SPEED, *speeds, "median"),
+            _sampled_row(WAVE_SPEED_SPREAD, *speeds, "quartiles")]
+    firsts = [table.iloc[0] if len(table) else None for table in resolved]
+    starts = [float(first["x_start"]) if first is not None else float("nan")
+              for first in firsts]
+    rows.append(_row(FIRST_WAVE_START, starts[0], starts[1], 0.0, unknown="no wave"))
+    ways = [str(first["direction"]) if first is not None else "" for first in firsts]
+    rows.append({"feature": WAVE_FEATURES[3], "unit": "", "measured": ways[0] or "none",
+                 "simulated": ways[1] or "none", "scatter": float("nan"), "difference": "",
+                 "tolerance": "same way",
+                 "verdict": ("agrees" if ways[0] == ways[1] else "differs")
+                 if ways[0] and ways[1] else "not compared",
+                 "note": "" if ways[0] and ways[1] else "no wave"})
+    shares = [float((table["kind"] == "gross").mean()) if len(table) else float("nan")
+              for table in (measured, simulated)]
+    sizes = [len(measured), len(simulated)]
+    row = _row(WHOLE_CONTACT, shares[0], shares[1], 0.0, unknown="no wave")
+    if row["verdict"] != "not compared":
+        pooled = (shares[0] * sizes[0] + shares[1] * sizes[1]) / (sizes[0] + sizes[1])
+        # a share seen in a handful of waves is uncertain by at least one wave in either
+        pooled = min(max(pooled, 1.0 / sum(sizes)), 1.0 - 1.0 / sum(sizes))
+        tolerance = 2.0 * float(np.sqrt(pooled * (1 - pooled)
+                                        * (1.0 / sizes[0] + 1.0 / sizes[1])))
+        row.update(tolerance=tolerance, verdict="agrees"
+                   if abs(row["difference"]) <= tolerance else "differs")
+    rows.append(row)
+    return pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
+
+
 def place_on_map(behaviour_map: xr.Dataset, height_ratio: float, friction: float
                  ) -> dict[str, Any]:
     """The test's place on the behaviour map: the nearest case to its H/L and f.
