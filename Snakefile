@@ -109,6 +109,7 @@ else:
     include: "workflow/rules/fit.smk"
     include: "workflow/rules/fits.smk"
     include: "workflow/rules/simulate.smk"
+    include: "workflow/rules/simulate_waves.smk"
     include: "workflow/rules/compare.smk"
 
 

@@ -56,6 +56,13 @@ REACHES = [
     ("fit", "seed", 7, {"fit"}),
     ("fit", "load_calibration", 0.01, {"fit"}),
     ("fit", "mesh_check", False, {"fit"}),
+    ("simulate_waves", "a", 0.012, {"simulate_waves"}),
+    ("simulate_waves", "b", 0.02, {"simulate_waves"}),
+    ("simulate_waves", "dc_um", 3.0, {"simulate_waves"}),
+    ("simulate_waves", "mu0", 0.8, {"simulate_waves"}),
+    ("simulate_waves", "v0_um_s", 2.0, {"simulate_waves"}),
+    ("simulate_waves", "elements", 320, {"simulate_waves"}),
+    ("simulate_waves", "field_rate_hz", 20.0, {"simulate_waves"}),
     # the rows' paths name their mesh: the assembly's command changes with it
     ("map", "elements", 640, {"map_row", "map_assemble"}),
     ("map", "band_elements", 80, {"map_row", "map_assemble"}),
@@ -124,6 +131,16 @@ def test_a_setting_reaches_exactly_the_stages_that_use_it(workdir, default_comma
     assert {name for name in changed if changed[name] != default_commands[name]} == rules
 
 
+def test_without_quasi_dynamic_runs_compare_takes_no_simulated_waves(workdir):
+    off = commands(workdir, "simulate_waves:\n  enabled: false\n")
+    assert "simulate_waves" not in off
+    assert not any("--simulated-waves" in line for line in off["compare"])
+    on = commands(workdir)
+    filmed = [line for line in on["compare"] if "--waves" in line]
+    assert filmed and all("--simulated-waves" in line for line in filmed)
+    assert len(on["simulate_waves"]) == len(filmed)
+
+
 def test_without_fits_the_gross_edge_ratio_reaches_detection_alone(workdir):
     unfitted = "fit:\n  enabled: false\n"
     before = commands(workdir, unfitted)
@@ -138,8 +155,8 @@ def test_every_schema_setting_is_tried():
     schema = load_schema("config")["properties"]
     tried = {(s, k) for s, k, _, _ in REACHES}
     untried = {("map", "height_ratios"), ("map", "row_jobs"), ("map", "shard_size"),
-               ("fit", "enabled")}  # jobs
-    for section in ("detection", "video", "fit", "map"):
+               ("fit", "enabled"), ("simulate_waves", "enabled")}  # jobs
+    for section in ("detection", "video", "fit", "simulate_waves", "map"):
         for key in schema[section]["properties"]:
             assert (section, key) in tried | untried, f"{section}.{key} is not tried"
 

@@ -255,11 +255,14 @@ def _compare(args: argparse.Namespace) -> None:
     simulated = read_dataset(args.simulated, "simulated recording")
     steps = read_dataset(args.steps, "solver steps") if args.steps else None
     waves = read_table(args.waves) if args.waves is not None else None
+    simulated_waves = (read_table(args.simulated_waves) if args.simulated_waves is not None
+                       else None)
     scatter = read_table(args.scatter) if args.scatter is not None else None
     check_same_test([(args.events, events_ds.attrs), (args.fit, fit),
                      (args.simulated, simulated.attrs)]
                     + [(path, item.attrs) for path, item in [
-                        (args.steps, steps), (args.waves, waves), (args.scatter, scatter)]
+                        (args.steps, steps), (args.waves, waves), (args.scatter, scatter),
+                        (args.simulated_waves, simulated_waves)]
                        if item is not None])
     detection = _detection_settings(args)
     _check_detection(fit, detection, args.fit)
@@ -267,7 +270,7 @@ def _compare(args: argparse.Namespace) -> None:
                          min_drop=float(events_ds.attrs.get("min_drop", float("nan")))
                          if "min_drop" in events_ds.attrs else None,
                          scatter=scatter,
-                         detection=detection)
+                         detection=detection, simulated_waves=simulated_waves)
     summary: dict[str, Any] = {"test_id": fit["test_id"],
                                "recording_sha256": fit["recording_sha256"],
                                "law": fit["chosen"], "parameters": fit["parameters"],
@@ -578,6 +581,30 @@ def _simulate_test(args: argparse.Namespace) -> None:
           f"{', '.join(f'{k} {v:.4g}' for k, v in fit['parameters'].items())}, "
           f"{replay.simulation.sizes['step']} steps, gross/partial edge threshold "
           f"{replay.recording.attrs['gross_edge_ratio']:.3g}")
+
+
+def _simulate_waves(args: argparse.Namespace) -> None:
+    from slipwave.fit import read_fit
+    from slipwave.identity import stamp
+    from slipwave.io import write_dataset, write_table
+    from slipwave.setup import TestSetup
+    from slipwave.simulate_waves import rate_state_law, simulate_waves
+
+    fit = read_fit(args.fit)
+    setup = TestSetup.from_dict(fit["setup"])
+    law = rate_state_law({"a": args.a, "b": args.b, "dc_um": args.dc_um, "mu0": args.mu0,
+                          "v0_um_s": args.v0_um_s})
+    run, waves = simulate_waves(setup, law, elements=args.elements,
+                                field_rate=args.field_rate, sample_rate=args.sample_rate)
+    stamp(run.attrs, "quasi-dynamic run", fit)
+    write_dataset(run, args.output)
+    write_table(waves, args.waves, fit)
+    speeds = waves["speed"].dropna()
+    print(f"{args.fit} -> {args.output}: {setup.test_id} under a {args.a:g} b {args.b:g} "
+          f"Dc {args.dc_um:g} um mu0 {args.mu0:g}, {args.elements} elements: {len(waves)} "
+          f"waves, median front speed "
+          f"{f'{speeds.median():.0f} mm/s' if len(speeds) else 'none'}; "
+          f"{run.attrs['steps']} steps")
 
 
 def _map_row(args: argparse.Namespace) -> None:
@@ -967,6 +994,35 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--plot", type=Path, default=None, help="also draw the zones (PNG, SVG)")
     sim.set_defaults(run=_simulate)
 
+    waves_sim = commands.add_parser(
+        "simulate-waves",
+        help="simulate a filmed test quasi-dynamically: its waves with a speed",
+        description="Run the test's slab, normal load and drive through the quasi-dynamic "
+        "contact under a rate-and-state law (aging), and write the run (netCDF) and its "
+        "waves in the video's columns (CSV), on the test's clock.")
+    waves_sim.add_argument("--fit", type=_input, required=True,
+                           help="the test's fit.json (its setup and identity)")
+    for name, unit in (("a", ""), ("b", ""), ("dc_um", ", um"), ("mu0", ""),
+                       ("v0_um_s", ", um/s")):
+        waves_sim.add_argument(f"--{name.replace('_', '-')}",
+                               type=_setting("simulate_waves", name),
+                               default=default.WAVES_LAW[name],
+                               help=f"the law's {name}{unit} (%(default)s)")
+    waves_sim.add_argument("--elements", type=_setting("simulate_waves", "elements"),
+                           default=default.WAVES_ELEMENTS,
+                           help="elements along the contact (%(default)s)")
+    waves_sim.add_argument("--field-rate", type=_setting("simulate_waves", "field_rate_hz"),
+                           default=default.WAVES_FIELD_RATE_HZ,
+                           help="records of the nodes' fields per second (%(default)s)")
+    waves_sim.add_argument("--sample-rate", type=_positive_float,
+                           default=default.SAMPLE_RATE_HZ,
+                           help="records of the loads and sensors per second (%(default)s)")
+    waves_sim.add_argument("-o", "--output", type=Path, required=True,
+                           help="netCDF of the run")
+    waves_sim.add_argument("--waves", type=Path, required=True,
+                           help="CSV of its waves (the video's columns)")
+    waves_sim.set_defaults(run=_simulate_waves)
+
     mapping = commands.add_parser(
         "map", help="the behaviour map over f x H/L (the paper's figure 2)",
         description="'map row' runs every friction coefficient at one H/L (or several); "
@@ -1100,6 +1156,9 @@ def build_parser() -> argparse.ArgumentParser:
                          help="the solver's steps ('slipwave simulate --steps')")
     compare.add_argument("--fit", type=_input, required=True, help="fit.json")
     compare.add_argument("--waves", type=_input, default=None, help="waves CSV of the video")
+    compare.add_argument("--simulated-waves", type=_input, default=None,
+                         help="waves CSV of 'slipwave simulate-waves': with --waves, the "
+                         "wave speed, first wave and share over the whole contact compared")
     compare.add_argument("--map", type=_input, default=None, help="behaviour map netCDF")
     compare.add_argument("-o", "--output", type=Path, required=True, help="comparison CSV")
     compare.add_argument("--json", type=Path, default=None,

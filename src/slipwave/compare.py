@@ -251,98 +251,6 @@ def first_wave(simulation: xr.Dataset, *, min_extent: float = MIN_EXTENT
     return origin, way
 
 
-def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
-                 simulation: xr.Dataset | None = None, waves: pd.DataFrame | None = None,
-                 *, min_drop: float | None = None, scatter: pd.DataFrame | None = None,
-                 detection: DetectionSettings = DEFAULT_DETECTION) -> pd.DataFrame:
-    """Measured against simulated, one row per feature.
-
-    A feature agrees when the difference lies within its tolerance: what the
-    measurement allows (:data:`EVENT_FEATURES`), joined in quadrature with twice the
-    simulation's own scatter, the standard deviation of the feature over the
-    simulation and its neighbours (``scatter``). Under fs > fd the law settles in
-    cycles that change by whole slips with coefficients closer than any measurement
-    tells apart, so that what it cannot fix is not held against it.
-
-    Parameters
-    ----------
-    measured
-        The test's events (``slipwave detect`` with the simulation's
-        ``gross_edge_ratio``).
-    simulated_recording
-        The simulated recording (:func:`slipwave.simulate.replay_test`), whose
-        attrs carry ``gross_edge_ratio``.
-    simulation
-        The solver's steps, for where the first wave began and the way gross slips
-        swept; ``None``: those rows are not compared.
-    waves
-        The video's waves (``slipwave waves``); ``None``: no video rows.
-    min_drop
-        The measurement's smallest drop (N), used for the simulated events too.
-    scatter
-        The features of neighbouring simulations
-        (:func:`slipwave.simulate.sequence_scatter`), one row each; ``None``: no
-        scatter (the measurement's tolerances alone).
-    detection
-        The detection's settings (the measurement's), for the simulated events.
-
-    Returns
-    -------
-    pandas.DataFrame
-        :data:`COMPARISON_COLUMNS`; ``attrs["simulated_events"]`` holds the simulated
-        events.
-
-    """
-    if "gross_edge_ratio" not in simulated_recording.attrs:
-        raise SlipwaveError(f"{simulated_recording.attrs.get('source', 'the simulation')}: "
-                            "no gross_edge_ratio: not a recording of 'slipwave simulate --fit'")
-    simulated = detect_events(simulated_recording, **detection.keywords(
-        min_drop=min_drop, edge_convention="x_axis",
-        gross_edge_ratio=float(simulated_recording.attrs["gross_edge_ratio"])))
-    measured_values = event_features(measured)
-    simulated_values = event_features(simulated)
-    origin, way = first_wave(simulation) if simulation is not None else (np.nan, "")
-    simulated_values[ORIGIN.name] = origin
-
-    def scatter_of(name: str) -> float:
-        if scatter is None or name not in scatter:
-            return 0.0
-        return spread([simulated_values[name], *scatter[name].to_numpy(dtype=float)])
-
-    rows = [_row(feature, measured_values[feature.name], simulated_values[feature.name],
-                 scatter_of(feature.name)) for feature in EVENT_FEATURES]
-    if waves is not None and len(waves):
-        if waves["kind"].iloc[0] == "unresolved":
-            rows.append(_row(ORIGIN, float("nan"), origin, 0.0, unknown="the video's first "
-                             "wave was too fast to tell where it began"))
-        else:
-            rows.append(_row(ORIGIN, float(waves["x_start"].iloc[0]), origin,
-                             scatter_of(ORIGIN.name)))
-        seen = waves.loc[waves["kind"] == "gross", "direction"]
-        measured_way = seen.mode().iloc[0] if len(seen) else ""
-        same = bool(measured_way) and bool(way) and measured_way == way
-        rows.append({"feature": "way gross slips sweep (video vs zones)", "unit": "",
-                     "measured": measured_way or "none seen", "simulated": way or "none",
-                     "scatter": float("nan"), "difference": "", "tolerance": "same way",
-                     "verdict": ("agrees" if same else "differs") if measured_way and way
-                     else "not compared", "note": ""})
-        rows.append({"feature": "wave speed (video)", "unit": "mm/s",
-                     "measured": _median(waves, "speed"), "simulated": float("nan"),
-                     "scatter": float("nan"), "difference": float("nan"),
-                     "tolerance": float("nan"), "verdict": "not compared",
-                     "note": "the solver is quasi-static: its slips have no speed"})
-    else:
-        for feature in (ORIGIN.name, "way gross slips sweep (video vs zones)",
-                        "wave speed (video)"):
-            rows.append({"feature": feature, "unit": "", "measured": float("nan"),
-                         "simulated": float("nan"), "scatter": float("nan"),
-                         "difference": float("nan"), "tolerance": float("nan"),
-                         "verdict": "not compared", "note": "no video"})
-    table = pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
-    table.attrs["simulated_events"] = simulated
-    return table
-
-
 MEDIAN_ERROR = 0.929
 """The standard error of a sample's median, times the square root of its size, over its
 interquartile range (1.2533 sigma / 1.349 sigma, for a normal sample)."""
@@ -350,12 +258,15 @@ interquartile range (1.2533 sigma / 1.349 sigma, for a normal sample)."""
 QUARTILES_ERROR = 1.166
 """The same for its interquartile range (1.573 sigma / 1.349 sigma)."""
 
-WAVE_SPEED = Feature("wave speed (median)", "mm/s", 0.0)
-WAVE_SPEED_SPREAD = Feature("wave speed (interquartile range)", "mm/s", 0.0)
-FIRST_WAVE_START = Feature("first wave: where it began", "mm", ORIGIN.tolerance)
-WHOLE_CONTACT = Feature("waves that sweep the whole contact (share)", "1", 0.0)
+WAVE_SPEED = Feature("wave speed, median (video vs quasi-dynamic)", "mm/s", 0.0)
+WAVE_SPEED_SPREAD = Feature("wave speed, interquartile range (video vs quasi-dynamic)",
+                            "mm/s", 0.0)
+FIRST_WAVE_START = Feature("first wave: where it began (video vs quasi-dynamic)", "mm",
+                           ORIGIN.tolerance)
+WHOLE_CONTACT = Feature("share of waves over the whole contact (video vs quasi-dynamic)",
+                        "1", 0.0)
 WAVE_FEATURES = (WAVE_SPEED.name, WAVE_SPEED_SPREAD.name, FIRST_WAVE_START.name,
-                 "first wave: the way it ran", WHOLE_CONTACT.name)
+                 "first wave: the way it ran (video vs quasi-dynamic)", WHOLE_CONTACT.name)
 """The rows of :func:`compare_waves`, in order."""
 
 
@@ -454,6 +365,108 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
                    if abs(row["difference"]) <= tolerance else "differs")
     rows.append(row)
     return pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
+
+
+def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
+                 simulation: xr.Dataset | None = None, waves: pd.DataFrame | None = None,
+                 *, min_drop: float | None = None, scatter: pd.DataFrame | None = None,
+                 detection: DetectionSettings = DEFAULT_DETECTION,
+                 simulated_waves: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Measured against simulated, one row per feature.
+
+    A feature agrees when the difference lies within its tolerance: what the
+    measurement allows (:data:`EVENT_FEATURES`), joined in quadrature with twice the
+    simulation's own scatter, the standard deviation of the feature over the
+    simulation and its neighbours (``scatter``). Under fs > fd the law settles in
+    cycles that change by whole slips with coefficients closer than any measurement
+    tells apart, so that what it cannot fix is not held against it.
+
+    Parameters
+    ----------
+    measured
+        The test's events (``slipwave detect`` with the simulation's
+        ``gross_edge_ratio``).
+    simulated_recording
+        The simulated recording (:func:`slipwave.simulate.replay_test`), whose
+        attrs carry ``gross_edge_ratio``.
+    simulation
+        The solver's steps, for where the first wave began and the way gross slips
+        swept; ``None``: those rows are not compared.
+    waves
+        The video's waves (``slipwave waves``); ``None``: no video rows.
+    min_drop
+        The measurement's smallest drop (N), used for the simulated events too.
+    scatter
+        The features of neighbouring simulations
+        (:func:`slipwave.simulate.sequence_scatter`), one row each; ``None``: no
+        scatter (the measurement's tolerances alone).
+    detection
+        The detection's settings (the measurement's), for the simulated events.
+    simulated_waves
+        The waves of the test simulated quasi-dynamically (``slipwave simulate-waves``):
+        with the video's, the rows of :func:`compare_waves`; ``None``: the wave speed is
+        not compared (the quasi-static solver's slips have none).
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`COMPARISON_COLUMNS`; ``attrs["simulated_events"]`` holds the simulated
+        events.
+
+    """
+    if "gross_edge_ratio" not in simulated_recording.attrs:
+        raise SlipwaveError(f"{simulated_recording.attrs.get('source', 'the simulation')}: "
+                            "no gross_edge_ratio: not a recording of 'slipwave simulate --fit'")
+    simulated = detect_events(simulated_recording, **detection.keywords(
+        min_drop=min_drop, edge_convention="x_axis",
+        gross_edge_ratio=float(simulated_recording.attrs["gross_edge_ratio"])))
+    measured_values = event_features(measured)
+    simulated_values = event_features(simulated)
+    origin, way = first_wave(simulation) if simulation is not None else (np.nan, "")
+    simulated_values[ORIGIN.name] = origin
+
+    def scatter_of(name: str) -> float:
+        if scatter is None or name not in scatter:
+            return 0.0
+        return spread([simulated_values[name], *scatter[name].to_numpy(dtype=float)])
+
+    rows = [_row(feature, measured_values[feature.name], simulated_values[feature.name],
+                 scatter_of(feature.name)) for feature in EVENT_FEATURES]
+    if waves is not None and len(waves):
+        if waves["kind"].iloc[0] == "unresolved":
+            rows.append(_row(ORIGIN, float("nan"), origin, 0.0, unknown="the video's first "
+                             "wave was too fast to tell where it began"))
+        else:
+            rows.append(_row(ORIGIN, float(waves["x_start"].iloc[0]), origin,
+                             scatter_of(ORIGIN.name)))
+        seen = waves.loc[waves["kind"] == "gross", "direction"]
+        measured_way = seen.mode().iloc[0] if len(seen) else ""
+        same = bool(measured_way) and bool(way) and measured_way == way
+        rows.append({"feature": "way gross slips sweep (video vs zones)", "unit": "",
+                     "measured": measured_way or "none seen", "simulated": way or "none",
+                     "scatter": float("nan"), "difference": "", "tolerance": "same way",
+                     "verdict": ("agrees" if same else "differs") if measured_way and way
+                     else "not compared", "note": ""})
+        if simulated_waves is not None:
+            rows.extend(compare_waves(waves, simulated_waves).to_dict("records"))
+        else:
+            rows.append({"feature": WAVE_SPEED.name, "unit": "mm/s",
+                         "measured": _median(waves, "speed"), "simulated": float("nan"),
+                         "scatter": float("nan"), "difference": float("nan"),
+                         "tolerance": float("nan"), "verdict": "not compared",
+                         "note": "not simulated quasi-dynamically: the quasi-static "
+                                 "solver's slips have no speed"})
+    else:
+        for feature in (ORIGIN.name, "way gross slips sweep (video vs zones)",
+                        *(WAVE_FEATURES if simulated_waves is not None
+                          else (WAVE_SPEED.name,))):
+            rows.append({"feature": feature, "unit": "", "measured": float("nan"),
+                         "simulated": float("nan"), "scatter": float("nan"),
+                         "difference": float("nan"), "tolerance": float("nan"),
+                         "verdict": "not compared", "note": "no video"})
+    table = pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
+    table.attrs["simulated_events"] = simulated
+    return table
 
 
 def place_on_map(behaviour_map: xr.Dataset, height_ratio: float, friction: float

@@ -140,6 +140,15 @@ LOAD_CALIBRATION: float = _setting("fit", "load_calibration")
 SAMPLE_RATE_HZ = 100.0
 """Sampling rate of a simulated test's recording, Hz (the virtual bench's card)."""
 
+# The quasi-dynamic simulation of filmed tests (slipwave.simulate_waves; ``simulate_waves``).
+WAVES_LAW: dict[str, float] = {key: _setting("simulate_waves", key)
+                               for key in ("a", "b", "dc_um", "mu0", "v0_um_s")}
+"""The rate-and-state law the filmed tests' waves are simulated with."""
+WAVES_ELEMENTS: int = _setting("simulate_waves", "elements")
+"""Elements along the contact of those simulations."""
+WAVES_FIELD_RATE_HZ: float = _setting("simulate_waves", "field_rate_hz")
+"""Records per second of their nodes' fields."""
+
 # Spring-slider campaigns (slipwave.fit.slider; config section ``sliders``).
 SLIDER_TUNABLES: tuple[str, ...] = ("states", "members", "design", "acquisitions",
                                     "exploration", "samples", "draws", "seed")

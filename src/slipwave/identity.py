@@ -29,6 +29,7 @@ PRODUCTS = {
     "kymograph": "slipwave kymograph",
     "behaviour map": "slipwave map assemble",
     "map row": "slipwave map row",
+    "quasi-dynamic run": "slipwave simulate-waves",
     "spring-slider record": "slipwave slider-ingest",
     "spring-slider posterior": "slipwave slider-fit",
 }

@@ -98,6 +98,8 @@ def compare_inputs(wildcards):
     }
     if test_row(wildcards)["frames"]:
         inputs["waves"] = f"results/{wildcards.test_id}/waves.csv"
+        if config["simulate_waves"]["enabled"]:
+            inputs["simulated_waves"] = f"results/{wildcards.test_id}/simulated/waves.csv"
     return inputs
 
 

@@ -17,6 +17,11 @@ rule compare:
         waves=lambda wildcards, input: (
             f"--waves {shlex.quote(str(input.waves))}" if "waves" in input.keys() else ""
         ),
+        simulated_waves=lambda wildcards, input: (
+            f"--simulated-waves {shlex.quote(str(input.simulated_waves))}"
+            if "simulated_waves" in input.keys()
+            else ""
+        ),
         detection=detection_options,
     threads: 1
     resources:
@@ -26,6 +31,6 @@ rule compare:
         "../envs/slipwave.yaml"
     shell:
         "slipwave compare {input.events:q} --simulated {input.simulated:q} "
-        "--steps {input.steps:q} --scatter {input.scatter:q} --fit {input.fit:q} {params.waves} --map {input.map:q} "
+        "--steps {input.steps:q} --scatter {input.scatter:q} --fit {input.fit:q} {params.waves} {params.simulated_waves} --map {input.map:q} "
         "-o {output.table:q} --json {output.summary:q} "
         "--simulated-events {output.simulated_events:q} {params.detection} > {log:q} 2>&1"
