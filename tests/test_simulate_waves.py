@@ -7,23 +7,32 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
+import xarray as xr
 
 from fuzzing import valid_fit
 from slipwave.cli import main
 from slipwave.io import read_dataset, read_table
 from slipwave.io.tables import WAVE_COLUMNS
+from slipwave.plot import WAVE_COLOURS, plot_simulated_fronts
 from slipwave.setup import TestSetup
 from slipwave.simulate_waves import rate_state_law, simulate_waves
 
 LAW = {"a": 0.01, "b": 0.015, "dc_um": 2.0, "mu0": 0.9, "v0_um_s": 1.0}
 
 
-def test_a_test_runs_on_its_own_clock() -> None:
-    fit = valid_fit()
-    setup = TestSetup.from_dict(fit["setup"])
+@pytest.fixture(scope="module")
+def ran() -> tuple[TestSetup, xr.Dataset, pd.DataFrame]:
+    setup = TestSetup.from_dict(valid_fit()["setup"])
     run, waves = simulate_waves(setup, rate_state_law(LAW), elements=40, field_rate=10.0,
                                 sample_rate=20.0)
+    return setup, run, waves
+
+
+def test_a_test_runs_on_its_own_clock(ran: tuple[TestSetup, xr.Dataset, pd.DataFrame]
+                                      ) -> None:
+    setup, run, waves = ran
     loading = setup["loading_time_s"]
     assert float(run["time"][0]) == loading
     assert float(run["time"][-1]) == pytest.approx(setup["duration_s"])
@@ -79,3 +88,17 @@ def test_a_fit_without_its_setup_is_named(tmp_path: Path,
     err = capsys.readouterr().err
     assert status == 1 and "fit.json" in err and "setup" in err
     assert sorted(path.name for path in tmp_path.iterdir()) == ["fit.json"]
+
+
+def test_the_fronts_figure_draws_each_wave_in_its_direction_s_colour(
+        ran: tuple[TestSetup, xr.Dataset, pd.DataFrame]) -> None:
+    _, run, waves = ran
+    whole, first = plot_simulated_fronts(run, waves).axes
+    paths = [line for line in whole.get_lines() if line.get_linestyle() == "-"]
+    assert len(paths) == len(waves)
+    assert [line.get_color() for line in paths] == [WAVE_COLOURS[d] for d in waves["direction"]]
+    assert "m/s" in first.get_title(loc="left")
+    # the first wave's arrivals span its extent, within a few of its milliseconds
+    arrivals = first.get_lines()[0].get_xdata()
+    assert arrivals.min() >= 0.0 and arrivals.max() <= 1e3 * (
+        waves["t_end"].iloc[0] - waves["t_start"].iloc[0]) + 1e-6

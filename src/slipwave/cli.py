@@ -404,15 +404,21 @@ def _report(args: argparse.Namespace) -> None:
     simulated = (None if args.simulated is None
                  else read_dataset(args.simulated, "simulated recording"))
     contact = None if args.contact is None else read_dataset(args.contact, "contact history")
+    quasi_dynamic = (None if args.quasi_dynamic is None
+                     else read_dataset(args.quasi_dynamic, "quasi-dynamic run"))
+    if (quasi_dynamic is None) != (args.simulated_waves is None):
+        raise SlipwaveError("--quasi-dynamic and --simulated-waves go together")
     compared = {} if args.comparison_json is None else read_comparison(args.comparison_json)
     tables = {option: None if path is None else read_table(path) for option, path in [
         ("waves", args.waves), ("fused", args.fused), ("comparison", args.comparison),
-        ("simulated_events", args.simulated_events)]}
+        ("simulated_events", args.simulated_events),
+        ("simulated_waves", args.simulated_waves)]}
     check_same_test([(args.recording, recording.attrs)] + [
         (path, content) for path, content in [
             (args.events, None if events is None else events.attrs), (args.fit, fit),
             (args.simulated, None if simulated is None else simulated.attrs),
             (args.contact, None if contact is None else contact.attrs),
+            (args.quasi_dynamic, None if quasi_dynamic is None else quasi_dynamic.attrs),
             (args.comparison_json, compared or None),
             *[(getattr(args, option), None if table is None else table.attrs)
               for option, table in tables.items()]] if content is not None])
@@ -424,7 +430,7 @@ def _report(args: argparse.Namespace) -> None:
         kymo = read_dataset(args.kymograph, "kymograph")
         clock = read_clock(args.clock)
         video = video_summary(kymo, tables["waves"], clock, args.frames, events,
-                              tables["fused"])
+                              tables["fused"], quasi_dynamic, tables["simulated_waves"])
     pairing = None
     if fit is not None or simulated is not None:
         behaviour_map = None if args.map is None else read_dataset(args.map, "behaviour map")
@@ -912,6 +918,11 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("--contact", type=_input, default=None,
                         help="simulated contact history of 'slipwave simulate --contact'")
     report.add_argument("--map", type=_input, default=None, help="behaviour map netCDF")
+    report.add_argument("--quasi-dynamic", type=_input, default=None,
+                        help="with --kymograph: the test run quasi-dynamically ('slipwave "
+                        "simulate-waves -o'), its fronts shown beside the video's")
+    report.add_argument("--simulated-waves", type=_input, default=None,
+                        help="its waves ('slipwave simulate-waves --waves')")
     report.add_argument("--pdf", type=Path, default=None, help="also print the page to PDF")
     report.add_argument("--threads", type=_positive_int, default=1,
                         help="processes to draw the figures on (default 1)")

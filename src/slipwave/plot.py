@@ -291,8 +291,7 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
               extent=(time[0], time[-1], x[0], x[-1]), vmin=0.0,
               vmax=float(np.percentile(moved.values, 99.9)) or 1.0, interpolation="nearest")
     if waves is not None:
-        colours = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581",
-                   "unresolved": "#9e9e9e"}
+        colours = WAVE_COLOURS
         for _, wave in waves.iterrows():
             if window is not None and not window[0] <= wave["t_start"] <= window[1]:
                 continue
@@ -308,6 +307,65 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
     ax.set_ylabel("x along the contact [mm]")
     ax.set_title("change of the band above the interface since the previous frame, and the "
                  "tracked fronts", fontsize=9, loc="left")
+    return fig
+
+
+WAVE_COLOURS = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581",
+                "unresolved": "#9e9e9e"}
+"""A wave's colour by its direction, the video's and the simulation's alike."""
+
+
+def plot_simulated_fronts(run: xr.Dataset, waves: pd.DataFrame) -> Figure:
+    """A quasi-dynamic run's fronts: where the contact starts to slip, and its waves.
+
+    Left, the whole run: a tick where each node's slip rate passes the front speed, and
+    each wave's path (from ``x_start`` at ``t_start`` to ``x_end`` at ``t_end``) in its
+    direction's colour. Right, the first wave in milliseconds: each node's arrival, the
+    slope being the front's speed.
+
+    Parameters
+    ----------
+    run
+        From :func:`slipwave.simulate_waves.simulate_waves` (or
+        :func:`slipwave.solver.quasi_dynamic.simulate_quasi_dynamic`).
+    waves
+        Its waves (:func:`slipwave.solver.fronts.front_waves`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Position along the contact against time.
+    """
+    from slipwave.solver.fronts import slip_intervals
+
+    intervals = slip_intervals(run)
+    x = run["x"].values
+    fig = Figure(figsize=(9.0, 3.4), layout="constrained")
+    whole, first = fig.subplots(1, 2, width_ratios=(2.2, 1.0))
+    whole.plot(intervals["start"], x[intervals["node"]], "|", color="#b71c1c", ms=2,
+               alpha=0.5)
+    for _, wave in waves.iterrows():
+        whole.plot([wave["t_start"], wave["t_end"]], [wave["x_start"], wave["x_end"]],
+                   color=WAVE_COLOURS[wave["direction"]], lw=1.2)
+    whole.set(xlabel="time [s]", ylabel="x along the contact [mm]",
+              xlim=(float(run["time"][0]), float(run["time"][-1])))
+    whole.set_title("where the contact starts to slip, and the waves", fontsize=9, loc="left")
+    if len(waves):
+        wave = waves.iloc[0]
+        inside = intervals[(intervals["start"] >= wave["t_start"] - 1e-9)
+                           & (intervals["start"] <= wave["t_end"] + 1e-9)]
+        arrivals = inside.groupby("node")["start"].min()
+        first.plot(1e3 * (arrivals.to_numpy() - wave["t_start"]), x[arrivals.index.to_numpy()],
+                   ".", color=WAVE_COLOURS[wave["direction"]], ms=3)
+        first.set_title(f"the first wave: {wave['speed'] / 1e3:.2g} m/s", fontsize=9,
+                        loc="left")
+        first.set_xlabel(f"time after {wave['t_start']:.3f} s [ms]")
+    else:
+        first.text(0.5, 0.5, "no wave", ha="center", va="center", transform=first.transAxes)
+    first.set_ylim(whole.get_ylim())
+    whole.legend(handles=[Patch(color=c, label=d.replace("_", " "))
+                          for d, c in WAVE_COLOURS.items() if d != "unresolved"],
+                 fontsize=7, loc="upper right")
     return fig
 
 

@@ -30,6 +30,7 @@ from slipwave.plot import (
     plot_map,
     plot_pairing,
     plot_recording,
+    plot_simulated_fronts,
     plot_space_time,
 )
 from slipwave.video import ClockFit, open_frames
@@ -154,6 +155,8 @@ def video_summary(
     frames: str | PathLike[str] | None = None,
     events: xr.Dataset | None = None,
     fused: pd.DataFrame | None = None,
+    quasi_dynamic: xr.Dataset | None = None,
+    simulated_waves: pd.DataFrame | None = None,
 ) -> dict[str, Any]:
     """The page's video section: kymograph with fronts, frames around the first gross slip.
 
@@ -172,13 +175,17 @@ def video_summary(
     fused
         From :func:`slipwave.video.fuse` (``events_video.csv``): how the load
         events and the waves pair, and whether their kinds agree.
+    quasi_dynamic, simulated_waves
+        The test run quasi-dynamically and its waves (``slipwave simulate-waves``), shown
+        beside the video's; ``None``: not shown.
 
     Returns
     -------
     dict
         Figures (matplotlib, drawn by :func:`render_test_page`), frames, wave
         counts and directions, median front speed, the clock, the first gross
-        slip's time and the pairing.
+        slip's time and the pairing; with a quasi-dynamic run, ``simulated`` (its law,
+        waves, median front speed and figure).
 
     """
     figures = [plot_kymograph(kymo, waves)]
@@ -203,7 +210,15 @@ def video_summary(
         pairing = {"both": int(source.get("both", 0)), "load": int(source.get("load", 0)),
                    "video": int(source.get("video", 0)), "judged": int(agrees.size),
                    "agree": int(agrees.sum())}
+    simulated = None
+    if quasi_dynamic is not None and simulated_waves is not None:
+        speeds = simulated_waves["speed"].dropna()
+        simulated = {"law": str(quasi_dynamic.attrs.get("law", "")),
+                     "waves": len(simulated_waves),
+                     "speed": float(speeds.median()) if len(speeds) else float("nan"),
+                     "figure": plot_simulated_fronts(quasi_dynamic, simulated_waves)}
     return {
+        "simulated": simulated,
         "figures": figures,
         "frames": strip,
         "waves": len(resolved),
@@ -474,6 +489,9 @@ def _drawn(video: dict[str, Any] | None, pairing: dict[str, Any] | None,
         video = {**video, "figures": list(video["figures"])}
         slots += [(video["figures"], i) for i in range(len(video["figures"]))]
         slots.append((video, "frames"))
+        if video.get("simulated") is not None:
+            video["simulated"] = dict(video["simulated"])
+            slots.append((video["simulated"], "figure"))
     if pairing is not None:
         pairing = {**pairing, "figures": dict(pairing["figures"])}
         slots += [(pairing["figures"], key) for key in pairing["figures"]]

@@ -41,6 +41,12 @@ def report_inputs(wildcards):
             clock=f"results/{wildcards.test_id}/clock.json",
             frames=frames,
         )
+        if config["fit"]["enabled"] and config["simulate_waves"]["enabled"]:
+            # the test run quasi-dynamically needs its fit.json (its setup)
+            inputs.update(
+                quasi_dynamic=f"results/{test}/simulated/quasi_dynamic.nc",
+                simulated_waves=f"results/{test}/simulated/waves.csv",
+            )
     return inputs
 
 
@@ -53,8 +59,11 @@ def video_options(wildcards, input):
     if "kymograph" not in input.keys():
         return ""
     return " ".join(
-        f"--{name} {shlex.quote(str(input[name]))}"
-        for name in ("kymograph", "waves", "fused", "clock", "frames")
+        f"--{name.replace('_', '-')} {shlex.quote(str(input[name]))}"
+        for name in (
+            "kymograph", "waves", "fused", "clock", "frames", "quasi_dynamic", "simulated_waves"
+        )
+        if name in input.keys()
     )
 
 
