@@ -293,7 +293,7 @@ def _sampled_row(feature: Feature, measured: np.ndarray, simulated: np.ndarray,
     row = _row(feature, values[0], values[1], 0.0,
                unknown="fewer than two waves with a speed" if statistic != "median"
                else "no wave with a speed")
-    tolerance = 2.0 * float(np.hypot(*errors))
+    tolerance = 2.0 * float(np.hypot(errors[0], errors[1]))
     row["tolerance"] = tolerance
     if row["verdict"] != "not compared":
         if not np.isfinite(tolerance):
@@ -338,8 +338,8 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
     """
     resolved = [table[table["kind"] != "unresolved"] for table in (measured, simulated)]
     speeds = [table["speed"].to_numpy(dtype=float) for table in resolved]
-    rows = [_sampled_row(WAVE_SPEED, *speeds, "median"),
-            _sampled_row(WAVE_SPEED_SPREAD, *speeds, "quartiles")]
+    rows = [_sampled_row(WAVE_SPEED, speeds[0], speeds[1], "median"),
+            _sampled_row(WAVE_SPEED_SPREAD, speeds[0], speeds[1], "quartiles")]
     firsts = [table.iloc[0] if len(table) else None for table in resolved]
     starts = [float(first["x_start"]) if first is not None else float("nan")
               for first in firsts]
@@ -448,7 +448,8 @@ def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,
                      "verdict": ("agrees" if same else "differs") if measured_way and way
                      else "not compared", "note": ""})
         if simulated_waves is not None:
-            rows.extend(compare_waves(waves, simulated_waves).to_dict("records"))
+            rows.extend({str(key): value for key, value in row.items()}
+                        for row in compare_waves(waves, simulated_waves).to_dict("records"))
         else:
             rows.append({"feature": WAVE_SPEED.name, "unit": "mm/s",
                          "measured": _median(waves, "speed"), "simulated": float("nan"),
