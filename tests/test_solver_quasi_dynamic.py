@@ -294,3 +294,13 @@ def test_the_shear_impedance_is_half_the_square_root_of_g_rho() -> None:
     wave_speed = math.sqrt(shear_modulus / 1200.0)  # m/s, about 44
     impedance = shear_modulus / (2 * wave_speed)  # Pa s/m
     assert qd.shear_impedance(slab) == pytest.approx(impedance * 1e-6 / 1e3)  # MPa s/mm
+
+
+def test_a_run_ends_between_two_field_records() -> None:
+    # the last field record (0.5 s) before the end (0.95 s): the steps stop at the end
+    body = qd.spring_slider_body(stiffness=1.0, normal_load=0.3, damping=1e-3)
+    ds = qd.simulate_quasi_dynamic(body, SLIDING, qd.Drive(0.3, 0.01), duration=0.95,
+                                   sample_rate=20.0, field_rate=2.0)
+    assert ds["field_time"].values.tolist() == [0.0, 0.5]
+    assert float(ds["time"][-1]) == pytest.approx(0.95)
+    assert np.isfinite(ds["T"].values).all()

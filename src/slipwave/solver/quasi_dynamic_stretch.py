@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from slipwave.solver.quasi_dynamic_steps import Law, Reduction, readouts, step_end
-from slipwave.solver.stiff_steps import OK, T_OLD, Stepper, T, interpolate, step
+from slipwave.solver.stiff_steps import BOUND, OK, T_OLD, Stepper, T, interpolate, step
 
 PASSED, CHANGES, FULL, TOO_SMALL = range(4)
 """What :func:`advance` returns: the time it was to pass is passed (or the end); the
@@ -106,7 +106,7 @@ def record_step(stepper: Stepper, reduction: Reduction, law: Law, begin: float, 
 @njit(cache=True)
 def advance(stepper: Stepper, reduction: Reduction, law: Law, band: int, force_scale: float,
             gap_scale: float, until: float, front_speed: float, record: Record) -> int:
-    """Step and record until ``until`` or the end is passed, or the contact changes.
+    """Step and record until ``until`` or the end is reached, or the contact changes.
 
     Parameters
     ----------
@@ -143,5 +143,5 @@ def advance(stepper: Stepper, reduction: Reduction, law: Law, band: int, force_s
         if margin < -1.0:
             return CHANGES
         record_step(stepper, reduction, law, sc[T_OLD], end, after, front_speed, record)
-        if end >= until:
+        if end >= until or end >= sc[BOUND]:  # past the last field time, the run ends
             return PASSED

@@ -34,8 +34,9 @@ _ERROR_CONSTANT = _KAPPA * _GAMMA + 1.0 / np.arange(1, MAX_ORDER + 2)
 OK, TOO_SMALL = 0, 1
 """What :func:`step` returns: a step taken; the step fell below the smallest."""
 
-# the places in Stepper.scalars; the time's and the last step's start's are read outside
-T, _H, _ORDER, _EQUAL, T_OLD, _LU_VALID, _JAC_C, _MAX_STEP, _BOUND, _RTOL, \
+# the places in Stepper.scalars; the time's, the last step's start's and the end's are read
+# outside
+T, _H, _ORDER, _EQUAL, T_OLD, _LU_VALID, _JAC_C, _MAX_STEP, BOUND, _RTOL, \
     _NEWTON_TOL, _JAC_AGE = range(12)
 _JAC_CHANGE = 0.3  # LSODE's CCMAX: a step's c this far from the Jacobian's takes a new one
 _JAC_STEPS = 20  # LSODE's MSBP: steps after which a Jacobian is taken again
@@ -268,8 +269,8 @@ def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
         if h_abs < min_step:
             return TOO_SMALL
         t_new = t + h_abs
-        if t_new > sc[_BOUND]:
-            t_new = sc[_BOUND]
+        if t_new > sc[BOUND]:
+            t_new = sc[BOUND]
             _change_d(D, order, (t_new - t) / h_abs)
             sc[_EQUAL] = 0
             lu_valid = False
