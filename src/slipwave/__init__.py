@@ -8,6 +8,11 @@ comparison reports, as a library and as a Snakemake workflow.
 from importlib.metadata import PackageNotFoundError, version
 
 from slipwave.errors import AcquisitionError, SlipwaveError
+from slipwave.kernel_sources import clear_stale_kernels
+
+# numba does not see a change in a kernel's callees from other files: their caches are
+# dropped whenever the package's sources differ from those they were built from
+clear_stale_kernels()
 
 try:
     __version__ = version("slipwave")
