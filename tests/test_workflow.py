@@ -33,6 +33,9 @@ SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n
 # the fit's default mesh
 SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  stages: 2\n"
              "  design: 3\n  acquisitions: 1\n  refinements: 1\n  predictive_members: 3\n")
+# and each filmed test's quasi-dynamic run on a coarse mesh (the converged 160 elements'
+# time is benchmarked in benchmarks/bench_quasi_dynamic.py)
+SMALL_WAVES = "simulate_waves:\n  elements: 40\n"
 NO_FIT = "fit:\n  enabled: false\n"
 
 
@@ -45,7 +48,7 @@ def workdir(tmp_path: Path) -> Path:
         else:
             shutil.copy(source, tmp_path / name)
     with open(tmp_path / "config/config.yaml", "a") as config:
-        config.write(SMALL_MAP + SMALL_FIT)
+        config.write(SMALL_MAP + SMALL_FIT + SMALL_WAVES)
     return tmp_path
 
 
@@ -101,11 +104,19 @@ def test_full_run_on_default_campaign(workdir):
         assert (workdir / f"reports/{test_id}.pdf").read_bytes().startswith(b"%PDF")
         comparison = pd.read_csv(workdir / f"results/{test_id}/comparison.csv", comment="#")
         assert set(comparison["verdict"]) <= {"agrees", "differs", "not compared"}
-        assert len(comparison) == 14
+        assert len(comparison) == 18
+        # every filmed test's waves against its quasi-dynamic run's, each row judged
+        waves_rows = comparison[comparison["feature"].str.endswith("(video vs quasi-dynamic)")]
+        assert len(waves_rows) == 5
+        assert waves_rows["verdict"].isin(["agrees", "differs"]).sum() >= 4
+        assert "The waves simulated quasi-dynamically" in page
+        simulated_waves = pd.read_csv(workdir / f"results/{test_id}/simulated/waves.csv",
+                                      comment="#")
+        assert len(simulated_waves) > 0 and (simulated_waves["speed"] > 0).all()
         fit = json.loads((workdir / f"results/{test_id}/fit.json").read_text())
         assert fit["setup"]["edge_reference"] == "frame" and fit["chosen"] == "coulomb"
         for rule in ("ingest", "detect", "kymograph", "waves", "report", "fit", "simulate",
-                     "compare"):
+                     "simulate_waves", "compare"):
             assert (workdir / f"results/logs/{rule}/{test_id}.log").exists()
         kymo = read_dataset(workdir / f"results/{test_id}/kymograph.nc")
         assert kymo.sizes["time"] > 6900 and kymo["x"].attrs["units"] == "mm"

@@ -606,8 +606,8 @@ def _simulate_waves(args: argparse.Namespace) -> None:
     write_dataset(run, args.output)
     write_table(waves, args.waves, fit)
     speeds = waves["speed"].dropna()
-    print(f"{args.fit} -> {args.output}: {setup.test_id} under a {args.a:g} b {args.b:g} "
-          f"Dc {args.dc_um:g} um mu0 {args.mu0:g}, {args.elements} elements: {len(waves)} "
+    print(f"{args.fit} -> {args.output}: {setup.test_id} under the {run.attrs['law_text']}, "
+          f"{args.elements} elements: {len(waves)} "
           f"waves, median front speed "
           f"{f'{speeds.median():.0f} mm/s' if len(speeds) else 'none'}; "
           f"{run.attrs['steps']} steps")

@@ -310,6 +310,7 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
     return fig
 
 
+_WAVES_SHOWN = 10  # the waves the fronts' figure shows: a run's hundreds fill it solid
 WAVE_COLOURS = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581",
                 "unresolved": "#9e9e9e"}
 """A wave's colour by its direction, the video's and the simulation's alike."""
@@ -318,10 +319,10 @@ WAVE_COLOURS = {"right_to_left": "#4fc3f7", "left_to_right": "#aed581",
 def plot_simulated_fronts(run: xr.Dataset, waves: pd.DataFrame) -> Figure:
     """A quasi-dynamic run's fronts: where the contact starts to slip, and its waves.
 
-    Left, the whole run: a tick where each node's slip rate passes the front speed, and
-    each wave's path (from ``x_start`` at ``t_start`` to ``x_end`` at ``t_end``) in its
-    direction's colour. Right, the first wave in milliseconds: each node's arrival, the
-    slope being the front's speed.
+    Left, the first ten waves (a whole run's hundreds are a solid block): a tick where
+    each node's slip rate passes the front speed, and each wave's path (from ``x_start``
+    at ``t_start`` to ``x_end`` at ``t_end``) in its direction's colour. Right, the first
+    wave in milliseconds: each node's arrival, the slope being the front's speed.
 
     Parameters
     ----------
@@ -347,9 +348,12 @@ def plot_simulated_fronts(run: xr.Dataset, waves: pd.DataFrame) -> Figure:
     for _, wave in waves.iterrows():
         whole.plot([wave["t_start"], wave["t_end"]], [wave["x_start"], wave["x_end"]],
                    color=WAVE_COLOURS[wave["direction"]], lw=1.2)
-    whole.set(xlabel="time [s]", ylabel="x along the contact [mm]",
-              xlim=(float(run["time"][0]), float(run["time"][-1])))
-    whole.set_title("where the contact starts to slip, and the waves", fontsize=9, loc="left")
+    shown = waves.iloc[:_WAVES_SHOWN]
+    window = ((float(shown["t_start"].min()) - 0.5, float(shown["t_end"].max()) + 0.5)
+              if len(shown) else (float(run["time"][0]), float(run["time"][-1])))
+    whole.set(xlabel="time [s]", ylabel="x along the contact [mm]", xlim=window)
+    whole.set_title(f"where the contact starts to slip, and the waves (the first "
+                    f"{len(shown)} of {len(waves)})", fontsize=9, loc="left")
     if len(waves):
         wave = waves.iloc[0]
         inside = intervals[(intervals["start"] >= wave["t_start"] - 1e-9)

@@ -213,7 +213,8 @@ def video_summary(
     simulated = None
     if quasi_dynamic is not None and simulated_waves is not None:
         speeds = simulated_waves["speed"].dropna()
-        simulated = {"law": str(quasi_dynamic.attrs.get("law", "")),
+        simulated = {"law": str(quasi_dynamic.attrs.get("law_text",
+                                                         quasi_dynamic.attrs.get("law", ""))),
                      "waves": len(simulated_waves),
                      "speed": float(speeds.median()) if len(speeds) else float("nan"),
                      "figure": plot_simulated_fronts(quasi_dynamic, simulated_waves)}

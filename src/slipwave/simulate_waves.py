@@ -52,6 +52,29 @@ def rate_state_law(settings: Mapping[str, Any]) -> RateState:
                      v0=float(settings["v0_um_s"]) / UM_PER_M)
 
 
+def law_text(law: RateState) -> str:
+    """The law as a reader writes it, in the config's units.
+
+    Parameters
+    ----------
+    law
+        An aging law of one state (:func:`rate_state_law`'s).
+
+    Returns
+    -------
+    str
+        Its a, b, D_c, mu0 and v0.
+
+    Examples
+    --------
+    >>> law_text(rate_state_law({"a": 0.01, "b": 0.015, "dc_um": 2.0, "mu0": 0.9,
+    ...                          "v0_um_s": 1.0}))
+    'aging law, a 0.01, b 0.015, D_c 2 um, mu0 0.9, v0 1 um/s'
+    """
+    return (f"{law.evolution} law, a {law.a:g}, b {law.b:g}, D_c {law.dc * UM_PER_M:g} um, "
+            f"mu0 {law.mu0:g}, v0 {law.v0 * UM_PER_M:g} um/s")
+
+
 def simulate_waves(setup: TestSetup, law: RateState, *, elements: int,
                    field_rate: float, sample_rate: float
                    ) -> tuple[xr.Dataset, pd.DataFrame]:
@@ -107,5 +130,5 @@ def simulate_waves(setup: TestSetup, law: RateState, *, elements: int,
     run["crossing_time"] = run["crossing_time"] + loading
     for name in ("time", "field_time"):
         run[name].attrs.update(units="s", long_name="time on the test's clock")
-    run.attrs["loading_time"] = loading
+    run.attrs.update(loading_time=loading, law_text=law_text(law))
     return run, waves
