@@ -186,20 +186,25 @@ def spread(values: Sequence[float]) -> float:
 
 
 def _row(feature: Feature, measured: float, simulated: float, scatter: float,
-         unknown: str = "not measured") -> dict[str, Any]:
+         unknown: str = "not measured", *, tolerance: float | None = None,
+         untold: str = "") -> dict[str, Any]:
     """One feature: the verdict from |simulated - measured| against the tolerance.
 
     The tolerance joins what the measurement allows with twice the simulation's own
     scatter (``scatter``, a standard deviation), in quadrature; ``unknown`` is the note
-    when nothing was measured.
+    when nothing was measured. A ``tolerance`` given stands for what the measurement
+    allows (two samples' own error); where it is not finite the feature is not
+    compared, ``untold`` saying why.
     """
     difference = simulated - measured
-    own = feature.allowed(measured)
+    own = feature.allowed(measured) if tolerance is None else tolerance
     allowed = float(np.hypot(own, 2.0 * scatter))
     note = ""
     if not (np.isfinite(measured) and np.isfinite(simulated)):
         verdict = "not compared"
         note = unknown if not np.isfinite(measured) else "not simulated"
+    elif not np.isfinite(allowed):
+        verdict, note = "not compared", untold
     else:
         verdict = "agrees" if abs(difference) <= allowed else "differs"
         if verdict == "agrees" and abs(difference) > own:
@@ -290,17 +295,11 @@ def _sampled_row(feature: Feature, measured: np.ndarray, simulated: np.ndarray,
         quartiles = float(np.subtract(*np.percentile(sample, [75, 25])))
         values.append(float(np.median(sample)) if statistic == "median" else quartiles)
         errors.append(factor * quartiles / np.sqrt(sample.size))
-    row = _row(feature, values[0], values[1], 0.0,
-               unknown="fewer than two waves with a speed" if statistic != "median"
-               else "no wave with a speed")
-    tolerance = 2.0 * float(np.hypot(errors[0], errors[1]))
-    row["tolerance"] = tolerance
-    if row["verdict"] != "not compared":
-        if not np.isfinite(tolerance):
-            row.update(verdict="not compared", note="fewer than two waves on a side")
-        else:
-            row["verdict"] = "agrees" if abs(row["difference"]) <= tolerance else "differs"
-    return row
+    return _row(feature, values[0], values[1], 0.0,
+                unknown="fewer than two waves with a speed" if statistic != "median"
+                else "no wave with a speed",
+                tolerance=2.0 * float(np.hypot(errors[0], errors[1])),
+                untold="fewer than two waves on a side")
 
 
 def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFrame:
@@ -354,16 +353,15 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
     shares = [float((table["kind"] == "gross").mean()) if len(table) else float("nan")
               for table in (measured, simulated)]
     sizes = [len(measured), len(simulated)]
-    row = _row(WHOLE_CONTACT, shares[0], shares[1], 0.0, unknown="no wave")
-    if row["verdict"] != "not compared":
+    tolerance = float("nan")
+    if min(sizes):
         pooled = (shares[0] * sizes[0] + shares[1] * sizes[1]) / (sizes[0] + sizes[1])
         # a share seen in a handful of waves is uncertain by at least one wave in either
         pooled = min(max(pooled, 1.0 / sum(sizes)), 1.0 - 1.0 / sum(sizes))
         tolerance = 2.0 * float(np.sqrt(pooled * (1 - pooled)
                                         * (1.0 / sizes[0] + 1.0 / sizes[1])))
-        row.update(tolerance=tolerance, verdict="agrees"
-                   if abs(row["difference"]) <= tolerance else "differs")
-    rows.append(row)
+    rows.append(_row(WHOLE_CONTACT, shares[0], shares[1], 0.0, unknown="no wave",
+                     tolerance=tolerance))
     return pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
 
 

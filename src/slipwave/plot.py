@@ -291,18 +291,17 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
               extent=(time[0], time[-1], x[0], x[-1]), vmin=0.0,
               vmax=float(np.percentile(moved.values, 99.9)) or 1.0, interpolation="nearest")
     if waves is not None:
-        colours = WAVE_COLOURS
         for _, wave in waves.iterrows():
             if window is not None and not window[0] <= wave["t_start"] <= window[1]:
                 continue
             if wave["direction"] == "unresolved":
                 ax.plot([wave["t_start"]] * 2, [wave["x_min"], wave["x_max"]],
-                        color=colours["unresolved"], lw=1.2)
+                        color=WAVE_COLOURS["unresolved"], lw=1.2)
             else:
                 ax.plot([wave["t_start"], wave["t_end"]], [wave["x_start"], wave["x_end"]],
-                        color=colours[wave["direction"]], lw=1.2)
-        ax.legend(handles=[Patch(color=c, label=d.replace("_", " ")) for d, c in colours.items()],
-                  fontsize=7, loc="upper right")
+                        color=WAVE_COLOURS[wave["direction"]], lw=1.2)
+        ax.legend(handles=[Patch(color=c, label=d.replace("_", " "))
+                           for d, c in WAVE_COLOURS.items()], fontsize=7, loc="upper right")
     ax.set_xlabel("camera time [s]")
     ax.set_ylabel("x along the contact [mm]")
     ax.set_title("change of the band above the interface since the previous frame, and the "

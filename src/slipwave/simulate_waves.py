@@ -30,7 +30,7 @@ UM_PER_M = 1e6
 
 
 def rate_state_law(settings: Mapping[str, Any]) -> RateState:
-    """The config's rate-and-state law (``simulate_waves.law``), in the solver's units.
+    """The config's rate-and-state law (the ``simulate_waves`` section), in the solver's units.
 
     Parameters
     ----------
