@@ -151,9 +151,8 @@ def tolerances() -> None:
 def _kernel_times(y: np.ndarray, reduction: steps.Reduction, law: steps.Law, band: int,
                   repeats: int) -> np.ndarray:
     """Seconds per call of each kernel of a step, at state y (compiled: no dispatch)."""
-    size = y.size
-    LU = np.zeros((size, 3 * band + 1))
-    pivots = np.zeros(size, dtype=np.int64)
+    per = 1 + law.b.size
+    factors = stiff_steps.factors_for(y.size, band, per)
     packed = steps.jacobian(0.0, y, reduction, law, band)
     times = np.zeros(5)
     for kernel in range(5):
@@ -165,9 +164,9 @@ def _kernel_times(y: np.ndarray, reduction: steps.Reduction, law: steps.Law, ban
             elif kernel == 1:
                 steps.jacobian(0.0, y, reduction, law, band)
             elif kernel == 2:
-                stiff_steps._factorise(packed, 1e-4, band, LU, pivots)
+                stiff_steps._factorise(packed, 1e-4, band, per, factors)
             elif kernel == 3:
-                stiff_steps._solve(LU, pivots, band, y)
+                stiff_steps._solve(factors, per, y)
             else:
                 steps.step_end(0.0, y, reduction, law, 1e-9, 1e-9)
         with objmode(end="f8"):

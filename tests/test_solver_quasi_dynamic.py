@@ -87,25 +87,59 @@ def test_the_jacobian_is_the_right_hand_side_s(law: RateState, control: str) -> 
     assert speeds.min() < 1e-3 < 1.0 < speeds.max()
 
 
-@pytest.mark.parametrize("band", [1, 3, 17])
-def test_the_band_factorisation_solves_with_interchanges(band: int) -> None:
+@pytest.mark.parametrize("band", [1, 3, 8])
+def test_the_band_lu_solves_with_interchanges(band: int) -> None:
     # a banded matrix whose diagonal is small beside its neighbours: pivoting is needed
     rng = np.random.default_rng(band)
     size = 60
-    packed = rng.standard_normal((size, 2 * band + 1))
-    packed[:, band] *= 1e-3
-    c = 2.0
-    dense = np.eye(size)
+    dense = np.zeros((size, size))
+    LU = np.zeros((size, 3 * band + 1))
     for j in range(size):
         for d in range(-band, band + 1):
             if 0 <= j + d < size:
-                dense[j + d, j] -= c * packed[j, band + d]
-    factors, pivots = np.zeros((size, 3 * band + 1)), np.zeros(size, dtype=np.int64)
-    stiff_steps._factorise(packed, c, band, factors, pivots)
+                value = rng.standard_normal() * (1e-3 if d == 0 else 1.0)
+                dense[j + d, j] = value
+                LU[j, 2 * band + d] = value
+    pivots = np.zeros(size, dtype=np.int64)
+    stiff_steps._band_lu(LU, pivots, band)
     assert (pivots != np.arange(size)).any()
     b = rng.standard_normal(size)
-    x = stiff_steps._solve(factors, pivots, band, b)
+    x = stiff_steps._band_solve(LU, pivots, band, b)
     assert np.allclose(x, np.linalg.solve(dense, b), rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize(("per", "node_band"), [(2, 0), (2, 3), (3, 2)])
+def test_the_newton_matrix_with_each_nodes_states_eliminated(per: int, node_band: int
+                                                             ) -> None:
+    # a Jacobian of the contact's pattern (a node's states touch its own position and
+    # states only; positions couple within a band of nodes), its I - c J solved whole
+    rng = np.random.default_rng(10 * per + node_band)
+    nodes, states = 12, per - 1
+    band = node_band * per + states  # the entries' half-width jacobian() is given
+    size = nodes * per
+    J = np.zeros((size, size))
+    for k in range(nodes):
+        rows = range(k * per, (k + 1) * per)
+        for j in range(max(0, k - node_band), min(nodes, k + node_band + 1)):
+            for row in rows:
+                if abs(row - j * per) <= band:
+                    J[row, j * per] = rng.standard_normal()
+        for row in rows:
+            for m in range(states):
+                J[row, k * per + 1 + m] = rng.standard_normal()
+    # a state's own entry near 1 / c: its block nearly singular before the elimination
+    c = 0.7
+    J[1, 1] = 1.0 / c - 1e-3
+    packed = np.zeros((size, 2 * band + 1))
+    for row in range(size):
+        for column in range(size):
+            if abs(row - column) <= band:
+                packed[column, band + row - column] = J[row, column]
+    factors = stiff_steps.factors_for(size, band, per)
+    stiff_steps._factorise(packed, c, band, per, factors)
+    b = rng.standard_normal(size)
+    x = stiff_steps._solve(factors, per, b)
+    assert np.allclose(x, np.linalg.solve(np.eye(size) - c * J, b), rtol=1e-8, atol=1e-10)
 
 
 def _spring_sliders(stiffness: float, damping: float, duration: float

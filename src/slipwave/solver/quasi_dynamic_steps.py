@@ -35,6 +35,10 @@ from numba import njit
 _NEWTON_ITERATIONS = 80
 _NEWTON_TOLERANCE = 1e-13  # on ln|v|: relative on v
 _NEGLIGIBLE_LOG = 700.0  # a rate below exp(-700) mm/s: no damping is felt beside friction
+# beyond this, exp(-2 x) is below half a double's spacing at 1: 1 + exp(-2 x), tanh(x) and
+# 1 - exp(-2 x) are exactly 1, and their transcendentals are skipped
+_SATURATED = 20.0
+_LOG_TWO = float(np.log(2.0))
 
 
 class Law(NamedTuple):
@@ -189,6 +193,8 @@ def law_friction(log_scaled: float, a: float) -> float:
     float
         The friction coefficient.
     """
+    if log_scaled >= _SATURATED:
+        return a * (log_scaled + _LOG_TWO)
     if log_scaled > 0.0:
         return a * (log_scaled + np.log1p(np.sqrt(1.0 + np.exp(-2.0 * log_scaled))))
     return a * np.arcsinh(np.exp(log_scaled))
@@ -230,28 +236,33 @@ def slip_speed(tau: float, pressure: float, psi: float, damping: float, a: float
     if pressure <= 0.0:
         return tau / damping
     ratio = load / (pressure * a)
-    exponent = ratio - psi / a  # the undamped rate 2 v0 exp(-psi/a) sinh(ratio), in parts
-    log_speed = np.log(v0) + exponent + np.log(-np.expm1(-2.0 * ratio))
+    # the undamped rate 2 v0 exp(-psi/a) sinh(ratio), in logarithms
+    log_speed = np.log(v0) + ratio - psi / a
+    if ratio < _SATURATED:
+        log_speed += np.log(-np.expm1(-2.0 * ratio))
     if damping == 0.0 or log_speed <= -_NEGLIGIBLE_LOG:
         return np.exp(log_speed) if tau > 0.0 else -np.exp(log_speed)
-    bound = np.log(load / damping)  # the rate at which damping alone carries the load
-    if log_speed < bound:
+    speed = np.exp(log_speed)
+    carried = damping * speed
+    if carried < load:  # below the rate at which damping alone carries the load
         # Newton's first change from the undamped rate (where friction alone carries the
         # load) is eta v / (P a tanh(ratio) + eta v), taken here; below the tolerance (a
         # node that sticks or creeps) the undamped rate is the root
-        speed = np.exp(log_speed)
-        carried = damping * speed
-        change = carried / (pressure * a * np.tanh(ratio) + carried)
+        slope = pressure * a * (np.tanh(ratio) if ratio < _SATURATED else 1.0)
+        change = carried / (slope + carried)
         if change <= _NEWTON_TOLERANCE:
             return speed if tau > 0.0 else -speed
         log_speed -= change
     else:
-        log_speed = bound
+        log_speed = np.log(load / damping)
     offset = psi / a - np.log(2.0 * v0)  # ln X = ln |v| + offset
     for _ in range(_NEWTON_ITERATIONS):
         log_scaled = log_speed + offset
         speed = np.exp(log_speed)
-        if log_scaled > 0.0:  # a asinh(X) and its slope X / sqrt(1 + X^2), X large
+        if log_scaled >= _SATURATED:  # a asinh(X) = a ln(2 X), its slope 1
+            friction = a * (log_scaled + _LOG_TWO)
+            share = 1.0
+        elif log_scaled > 0.0:  # a asinh(X) and its slope X / sqrt(1 + X^2), X large
             root = np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
             friction = a * (log_scaled + np.log1p(root))
             share = 1.0 / root
@@ -304,7 +315,7 @@ def speed_partials(tau: float, pressure: float, psi: float, damping: float, a: f
         return 1.0 / slope, 0.0, 0.0
     sign = 1.0 if tau >= 0.0 else -1.0
     log_scaled = np.log(magnitude) + psi / a - np.log(2.0 * v0)
-    share = 1.0 / np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
+    share = 1.0 if log_scaled >= _SATURATED else 1.0 / np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
     return (1.0 / slope, -sign * law_friction(log_scaled, a) / slope,
             -sign * pressure * share / slope)
 
@@ -467,8 +478,10 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
         eta = reduction.damping[node]
         v = slip_speed(tau, pressure, psi, eta, law.a, law.v0)
         v_tau, v_p, v_psi = speed_partials(tau, pressure, psi, eta, law.a, law.v0, v)
-        # closed nodes are distinct and ascending: beyond band places in closed, beyond band in y
-        near = range(max(0, k - band), min(c, k + band + 1))
+        # closed nodes are distinct and ascending, each taking 1 + count places in y: beyond
+        # band // (1 + count) + 1 places in closed, beyond band in y
+        reach = band // (1 + count) + 1
+        near = range(max(0, k - reach), min(c, k + reach + 1))
         for j in near:
             d_shear, d_normal = M[k, j], M[c + k, j]
             if force:  # the flat's normal position follows the closed nodes' positions

@@ -3,15 +3,19 @@
 scipy's ``BDF`` (variable order 1 to 5, the numerical differentiation formulas of
 Shampine and Reichelt 1997, quasi-constant step size; Byrne and Hindmarsh 1975) ported
 to numba, its Newton matrix ``I - c J`` kept within the band of
-:func:`slipwave.solver.quasi_dynamic_steps.jacobian` and factorised by Gaussian
-elimination with partial pivoting in band storage (LAPACK's ``dgbtf2`` and ``dgbtrs``),
-a step's Python gone. One change to scipy's algorithm: the Jacobian is taken again when
-the Newton matrix's c has moved by 30 % from the one it was taken for, or after 20 steps
-(LSODE's rule). scipy keeps it until Newton fails, and within a step keeps the one
-taken for a longer try: on a spring-slider that one, taken where the try predicted a
-fast slip, made the corrections small without the equation holding, and a step passed
-over the slip's onset (T/N off by 0.0125; scipy's own ``BDF`` does the same there). The
-interpolant is scipy's (:func:`interpolate`).
+:func:`slipwave.solver.quasi_dynamic_steps.jacobian`, a step's Python gone. A node's
+states touch only its own slip rate, so the Newton matrix's rows of states are
+eliminated node by node (each node's block of states inverted) and what is factorised
+is the Schur complement on the nodes' positions: a band of nodes, not of entries, by
+Gaussian elimination with partial pivoting in band storage (LAPACK's ``dgbtf2`` and
+``dgbtrs``): at 160 elements and one state, a band of 8 nodes in place of 17 entries.
+One change to scipy's algorithm: the Jacobian is taken again when the Newton matrix's c
+has moved by 30 % from the one it was taken for, or after 20 steps (LSODE's rule).
+scipy keeps it until Newton fails, and within a step keeps the one taken for a longer
+try: on a spring-slider that one, taken where the try predicted a fast slip, made the
+corrections small without the equation holding, and a step passed over the slip's
+onset (T/N off by 0.0125; scipy's own ``BDF`` does the same there). The interpolant is
+scipy's (:func:`interpolate`).
 """
 
 from __future__ import annotations
@@ -44,6 +48,35 @@ _JAC_STEPS = 20  # LSODE's MSBP: steps after which a Jacobian is taken again
 STEPS, EVALUATIONS, JACOBIANS, FACTORISATIONS = range(4)
 
 
+class Factors(NamedTuple):
+    """The Newton matrix ``A = I - c J``, each node's states eliminated, factorised.
+
+    With a node's position s and its states q, ``A`` splits into blocks ``A_ss`` (a band
+    of nodes), ``A_sq`` and ``A_qq`` (a node's own only) and ``A_qs`` (a band of
+    nodes); ``A x = r`` is then ``S x_s = r_s - W r_q`` with ``W = A_sq A_qq^-1`` and the
+    Schur complement ``S = A_ss - W A_qs``, and ``x_q = A_qq^-1 (r_q - A_qs x_s)``.
+
+    Attributes
+    ----------
+    lu
+        (nodes, 3 band + 1): S's LU, LAPACK's band storage transposed (:func:`_band_lu`).
+    pivots
+        (nodes,): its row interchanges.
+    coupling
+        (nodes, states): W.
+    inverse
+        (nodes, states, states): each node's ``A_qq^-1``.
+    by_position
+        (nodes, states, 2 band + 1): ``A_qs``, its entry for node j at ``band + j - k``.
+    """
+
+    lu: np.ndarray
+    pivots: np.ndarray
+    coupling: np.ndarray
+    inverse: np.ndarray
+    by_position: np.ndarray
+
+
 class Stepper(NamedTuple):
     """A BDF integration's state (arrays the steps update in place).
 
@@ -53,11 +86,8 @@ class Stepper(NamedTuple):
         (MAX_ORDER + 3, size): the backward differences; ``D[0]`` is the state.
     J
         The Jacobian in band storage (:func:`~slipwave.solver.quasi_dynamic_steps.jacobian`).
-    LU
-        (size, 3 band + 1): the factorised Newton matrix, LAPACK's band storage
-        transposed.
-    pivots
-        (size,): its row interchanges.
+    factors
+        The factorised Newton matrix (:class:`Factors`).
     scalars
         t, the step, the order, the equal steps taken, the last step's start, whether
         LU is valid, the c that J was taken for, the longest step, the end, rtol, Newton's
@@ -70,8 +100,7 @@ class Stepper(NamedTuple):
 
     D: np.ndarray
     J: np.ndarray
-    LU: np.ndarray
-    pivots: np.ndarray
+    factors: Factors
     scalars: np.ndarray
     atol: np.ndarray
     counts: np.ndarray
@@ -106,24 +135,17 @@ def _change_d(D: np.ndarray, order: int, factor: float) -> None:
 
 
 @njit(cache=True)
-def _factorise(J: np.ndarray, c: float, band: int, LU: np.ndarray, pivots: np.ndarray
-               ) -> None:
-    """LU with partial pivoting of ``I - c J`` (J packed within ``band``), band storage.
+def _band_lu(LU: np.ndarray, pivots: np.ndarray, band: int) -> None:
+    """LU with partial pivoting of a band matrix, in place (LAPACK's ``dgbtf2``).
 
-    LAPACK's ``dgbtf2`` with its band storage transposed, so that a column is
-    contiguous: A[i, j] at ``LU[j, 2 band + i - j]``, the first ``band`` places of each
-    column for the fill-in of the interchanges.
+    Its band storage transposed, so that a column is contiguous: A[i, j] at
+    ``LU[j, 2 band + i - j]``, the first ``band`` places of each column for the fill-in
+    of the interchanges.
     """
-    n = J.shape[0]
+    n = LU.shape[0]
     kl = ku = band
     kv = kl + ku
-    LU[:, :] = 0.0
     multipliers = np.empty(kl)
-    for j in range(n):
-        for d in range(-band, band + 1):  # row i = j + d
-            if 0 <= j + d < n:
-                LU[j, kv + d] = -c * J[j, band + d]
-        LU[j, kv] += 1.0
     ju = 0
     for j in range(n):
         km = min(kl, n - 1 - j)
@@ -154,8 +176,8 @@ def _factorise(J: np.ndarray, c: float, band: int, LU: np.ndarray, pivots: np.nd
 
 
 @njit(cache=True)
-def _solve(LU: np.ndarray, pivots: np.ndarray, band: int, b: np.ndarray) -> np.ndarray:
-    """Solve with :func:`_factorise`'s factors (LAPACK's ``dgbtrs``)."""
+def _band_solve(LU: np.ndarray, pivots: np.ndarray, band: int, b: np.ndarray) -> np.ndarray:
+    """Solve with :func:`_band_lu`'s factors (LAPACK's ``dgbtrs``)."""
     n = b.size
     kl = band
     kv = 2 * band
@@ -176,6 +198,139 @@ def _solve(LU: np.ndarray, pivots: np.ndarray, band: int, b: np.ndarray) -> np.n
         above, factors = x[first:j], LU[j, kv + first - j:kv]
         for i in range(j - first):
             above[i] -= factors[i] * xj
+    return x
+
+
+@njit(cache=True)
+def node_band(band: int, per: int) -> int:
+    """The nodes on each side that a band of ``band`` entries of y couples to a position.
+
+    Parameters
+    ----------
+    band
+        The Jacobian's half-width in entries of y.
+    per
+        The entries of y per node: its position, then its states.
+
+    Returns
+    -------
+    int
+        The half-width in nodes.
+    """
+    return (band - (per - 1)) // per
+
+
+@njit(cache=True)
+def factors_for(size: int, band: int, per: int) -> Factors:
+    """Room for :func:`_factorise`'s factors.
+
+    Parameters
+    ----------
+    size
+        The state's size.
+    band
+        The Jacobian's half-width in entries of y.
+    per
+        The entries of y per node.
+
+    Returns
+    -------
+    Factors
+        Zeros.
+    """
+    nodes, states, nb = size // per, per - 1, node_band(band, per)
+    return Factors(np.zeros((nodes, 3 * nb + 1)), np.zeros(nodes, dtype=np.int64),
+                   np.zeros((nodes, states)), np.zeros((nodes, states, states)),
+                   np.zeros((nodes, states, 2 * nb + 1)))
+
+
+@njit(cache=True)
+def _entry(J: np.ndarray, band: int, row: int, column: int) -> float:
+    """J[row, column] from its packed band (0 outside it)."""
+    if abs(row - column) > band:
+        return 0.0
+    return J[column, band + row - column]
+
+
+@njit(cache=True)
+def _factorise(J: np.ndarray, c: float, band: int, per: int, factors: Factors) -> None:
+    """Factorise ``I - c J`` (J packed within ``band``), each node's states eliminated.
+
+    Parameters
+    ----------
+    J
+        The Jacobian, packed (:func:`~slipwave.solver.quasi_dynamic_steps.jacobian`):
+        a node's states couple to its own states and position only.
+    c
+        The step's coefficient.
+    band
+        J's half-width in entries.
+    per
+        The entries of y per node.
+    factors
+        Filled in place (:class:`Factors`).
+    """
+    nodes, states, nb = J.shape[0] // per, per - 1, node_band(band, per)
+    kv = 2 * nb
+    S = factors.lu
+    S[:, :] = 0.0
+    block = np.empty((states, states))
+    for k in range(nodes):
+        here = k * per
+        for m in range(states):
+            for m2 in range(states):
+                block[m, m2] = (1.0 if m == m2 else 0.0) - c * _entry(
+                    J, band, here + 1 + m, here + 1 + m2)
+        inverse = factors.inverse[k]
+        if states == 1:
+            inverse[0, 0] = 1.0 / block[0, 0]
+        else:
+            inverse[:, :] = np.linalg.inv(block)
+        for m2 in range(states):
+            total = 0.0
+            for m in range(states):
+                total += -c * _entry(J, band, here, here + 1 + m) * inverse[m, m2]
+            factors.coupling[k, m2] = total
+        for j in range(max(0, k - nb), min(nodes, k + nb + 1)):
+            value = (1.0 if j == k else 0.0) - c * _entry(J, band, here, j * per)
+            for m in range(states):
+                by_position = -c * _entry(J, band, here + 1 + m, j * per)
+                factors.by_position[k, m, nb + j - k] = by_position
+                value -= factors.coupling[k, m] * by_position
+            S[j, kv + k - j] = value
+    _band_lu(S, factors.pivots, nb)
+
+
+@njit(cache=True)
+def _solve(factors: Factors, per: int, b: np.ndarray) -> np.ndarray:
+    """Solve ``(I - c J) x = b`` with :func:`_factorise`'s factors."""
+    nodes, states = factors.coupling.shape
+    nb = (factors.by_position.shape[2] - 1) // 2
+    reduced = np.empty(nodes)
+    for k in range(nodes):
+        value = b[k * per]
+        for m in range(states):
+            value -= factors.coupling[k, m] * b[k * per + 1 + m]
+        reduced[k] = value
+    positions = _band_solve(factors.lu, factors.pivots, nb, reduced)
+    x = np.empty(b.size)
+    rest = np.empty(states)
+    for k in range(nodes):
+        here = k * per
+        x[here] = positions[k]
+        first, last = max(0, k - nb), min(nodes, k + nb + 1)
+        near = positions[first:last]
+        for m in range(states):
+            row = factors.by_position[k, m, nb - k + first:nb - k + last]
+            value = b[here + 1 + m]
+            for j in range(last - first):
+                value -= row[j] * near[j]
+            rest[m] = value
+        for m in range(states):
+            total = 0.0
+            for m2 in range(states):
+                total += factors.inverse[k, m, m2] * rest[m2]
+            x[here + 1 + m] = total
     return x
 
 
@@ -224,8 +379,8 @@ def start(t0: float, y0: np.ndarray, t_bound: float, rtol: float, atol: np.ndarr
     counts = np.zeros(4, dtype=np.int64)
     counts[EVALUATIONS] = 2
     counts[JACOBIANS] = 1
-    return Stepper(D, jacobian(t0, y0, reduction, law, band), np.zeros((size, 3 * band + 1)),
-                   np.zeros(size, dtype=np.int64), scalars, atol, counts)
+    return Stepper(D, jacobian(t0, y0, reduction, law, band),
+                   factors_for(size, band, 1 + law.b.size), scalars, atol, counts)
 
 
 @njit(cache=True)
@@ -299,7 +454,7 @@ def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
         converged = False
         while not converged:
             if not lu_valid:
-                _factorise(s.J, c, band, s.LU, s.pivots)
+                _factorise(s.J, c, band, 1 + law.b.size, s.factors)
                 s.counts[FACTORISATIONS] += 1
                 lu_valid = True
             converged, iterations, y_new, d = _newton(s, reduction, law, band, t_new,
@@ -374,7 +529,7 @@ def _newton(s: Stepper, reduction: Reduction, law: Law, band: int, t_new: float,
         s.counts[EVALUATIONS] += 1
         if not np.all(np.isfinite(f)):
             break
-        dy = _solve(s.LU, s.pivots, band, c * f - psi - d)
+        dy = _solve(s.factors, 1 + law.b.size, c * f - psi - d)
         norm = _norm(dy / scale)
         rate = -1.0 if norm_old < 0 else norm / norm_old
         if rate >= 0 and (rate >= 1 or rate ** (_NEWTON_ITERATIONS - k) / (1 - rate) * norm
