@@ -60,7 +60,7 @@ INITIAL_AGE = 10.0
 """The contacts' age when the tangential drive starts, s: the state theta after the
 normal loading, which on the bench takes seconds."""
 
-TOLERANCE = 1e-4
+TOLERANCE = 1e-5
 """The steps' tolerance: on s in units of the smallest Dc, on ln theta, and relative."""
 
 FRONT_SPEED_RATIO = 10.0
