@@ -33,7 +33,7 @@ SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n
 # the fit's default mesh
 SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  stages: 2\n"
              "  design: 3\n  acquisitions: 1\n  refinements: 1\n  predictive_members: 3\n")
-# and each filmed test's quasi-dynamic run on a coarse mesh (the converged 160 elements'
+# and each filmed test's quasi-dynamic run on a coarse mesh (the converged 320 elements'
 # time is benchmarked in benchmarks/bench_quasi_dynamic.py)
 SMALL_WAVES = "simulate_waves:\n  elements: 40\n"
 NO_FIT = "fit:\n  enabled: false\n"
