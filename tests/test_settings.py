@@ -61,7 +61,7 @@ REACHES = [
     ("simulate_waves", "dc_um", 3.0, {"simulate_waves"}),
     ("simulate_waves", "mu0", 0.8, {"simulate_waves"}),
     ("simulate_waves", "v0_um_s", 2.0, {"simulate_waves"}),
-    ("simulate_waves", "elements", 320, {"simulate_waves"}),
+    ("simulate_waves", "elements", 160, {"simulate_waves"}),
     ("simulate_waves", "field_rate_hz", 20.0, {"simulate_waves"}),
     # the rows' paths name their mesh: the assembly's command changes with it
     ("map", "elements", 640, {"map_row", "map_assemble"}),
