@@ -110,6 +110,8 @@ def test_full_run_on_default_campaign(workdir):
         assert len(waves_rows) == 5
         assert waves_rows["verdict"].isin(["agrees", "differs"]).sum() >= 4
         assert "The waves simulated quasi-dynamically" in page
+        # the page says the run's mesh, and that this test's convergence is not checked
+        assert "The run has 40 elements along the contact" in page
         simulated_waves = pd.read_csv(workdir / f"results/{test_id}/simulated/waves.csv",
                                       comment="#")
         assert len(simulated_waves) > 0 and (simulated_waves["speed"] > 0).all()

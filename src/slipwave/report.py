@@ -185,7 +185,7 @@ def video_summary(
         Figures (matplotlib, drawn by :func:`render_test_page`), frames, wave
         counts and directions, median front speed, the clock, the first gross
         slip's time and the pairing; with a quasi-dynamic run, ``simulated`` (its law,
-        waves, median front speed and figure).
+        waves, elements, median front speed and figure).
 
     """
     figures = [plot_kymograph(kymo, waves)]
@@ -216,6 +216,7 @@ def video_summary(
         simulated = {"law": str(quasi_dynamic.attrs.get("law_text",
                                                          quasi_dynamic.attrs.get("law", ""))),
                      "waves": len(simulated_waves),
+                     "elements": quasi_dynamic.sizes["x"] - 1,
                      "speed": float(speeds.median()) if len(speeds) else float("nan"),
                      "figure": plot_simulated_fronts(quasi_dynamic, simulated_waves)}
     return {
