@@ -178,8 +178,11 @@ def state_part(y: np.ndarray, node: int, law: Law) -> float:
 
 
 @njit(cache=True)
-def law_friction(log_scaled: float, a: float) -> float:
-    """The law's a asinh(X), in logarithms: exact at any psi over a.
+def law_friction(log_scaled: float, a: float) -> tuple[float, float]:
+    """The law's a asinh(X) and its slope's share X / sqrt(1 + X^2), in logarithms.
+
+    Exact at any psi over a; beyond ln X = 20 both are taken in their limits, exactly
+    what doubles hold there.
 
     Parameters
     ----------
@@ -190,14 +193,16 @@ def law_friction(log_scaled: float, a: float) -> float:
 
     Returns
     -------
-    float
-        The friction coefficient.
+    tuple
+        The friction coefficient, and d asinh(X) / d ln X.
     """
     if log_scaled >= _SATURATED:
-        return a * (log_scaled + _LOG_TWO)
+        return a * (log_scaled + _LOG_TWO), 1.0
     if log_scaled > 0.0:
-        return a * (log_scaled + np.log1p(np.sqrt(1.0 + np.exp(-2.0 * log_scaled))))
-    return a * np.arcsinh(np.exp(log_scaled))
+        root = np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
+        return a * (log_scaled + np.log1p(root)), 1.0 / root
+    scaled = np.exp(log_scaled)
+    return a * np.arcsinh(scaled), scaled / np.sqrt(1.0 + scaled * scaled)
 
 
 @njit(cache=True)
@@ -257,20 +262,8 @@ def slip_speed(tau: float, pressure: float, psi: float, damping: float, a: float
         log_speed = np.log(load / damping)
     offset = psi / a - np.log(2.0 * v0)  # ln X = ln |v| + offset
     for _ in range(_NEWTON_ITERATIONS):
-        log_scaled = log_speed + offset
         speed = np.exp(log_speed)
-        if log_scaled >= _SATURATED:  # a asinh(X) = a ln(2 X), its slope 1
-            friction = a * (log_scaled + _LOG_TWO)
-            share = 1.0
-        elif log_scaled > 0.0:  # a asinh(X) and its slope X / sqrt(1 + X^2), X large
-            root = np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
-            friction = a * (log_scaled + np.log1p(root))
-            share = 1.0 / root
-        else:
-            scaled = np.exp(log_scaled)
-            root = np.sqrt(1.0 + scaled * scaled)
-            friction = a * np.arcsinh(scaled)
-            share = scaled / root
+        friction, share = law_friction(log_speed + offset, a)
         change = (pressure * friction + damping * speed - load) / (
             pressure * a * share + damping * speed)
         log_speed -= change
@@ -315,9 +308,8 @@ def speed_partials(tau: float, pressure: float, psi: float, damping: float, a: f
         return 1.0 / slope, 0.0, 0.0
     sign = 1.0 if tau >= 0.0 else -1.0
     log_scaled = np.log(magnitude) + psi / a - np.log(2.0 * v0)
-    share = 1.0 if log_scaled >= _SATURATED else 1.0 / np.sqrt(1.0 + np.exp(-2.0 * log_scaled))
-    return (1.0 / slope, -sign * law_friction(log_scaled, a) / slope,
-            -sign * pressure * share / slope)
+    friction, share = law_friction(log_scaled, a)
+    return 1.0 / slope, -sign * friction / slope, -sign * pressure * share / slope
 
 
 @njit(cache=True)
