@@ -54,6 +54,7 @@ from slipwave.solver.fronts import front_waves, slip_intervals
 from slipwave.solver.quasi_dynamic import (
     TOLERANCE,
     Drive,
+    record_times,
     shear_impedance,
     simulate_quasi_dynamic,
     slab_body,
@@ -80,7 +81,7 @@ def run(elements: int, duration: float) -> tuple[xr.Dataset, float]:
     body = slab_body(Slab(elements=elements))
     start = time.process_time()
     ds = simulate_quasi_dynamic(body, LAW, DRIVE, duration=duration, sample_rate=100.0,
-                                field_rate=10.0)
+                                field_times=record_times(duration, 10.0))
     return ds, time.process_time() - start
 
 
@@ -141,7 +142,7 @@ def tolerances() -> None:
         body = slab_body(Slab(elements=160))
         start = time.process_time()
         ds = simulate_quasi_dynamic(body, LAW, DRIVE, duration=70.0, sample_rate=100.0,
-                                    field_rate=10.0, tolerance=tolerance)
+                                    field_times=record_times(70.0, 10.0), tolerance=tolerance)
         seconds = time.process_time() - start
         medians[tolerance] = float(front_waves(ds, min_extent=MIN_EXTENT)["speed"].median())
         print(f"quasi-dynamic: tolerance {tolerance:g}: 70 s at 160 elements in {seconds:.1f} s"
@@ -202,7 +203,7 @@ def where_the_time_goes() -> None:
     stretch_steps.advance = watched  # type: ignore[assignment]  # watched for two states
     try:
         ds = simulate_quasi_dynamic(body, LAW, DRIVE, duration=60.0, sample_rate=100.0,
-                                    field_rate=1000.0)
+                                    field_times=record_times(60.0, 1000.0))
     finally:
         stretch_steps.advance = advance
     names = ("right-hand side", "Jacobian", "factorisation", "solve", "step's end")
@@ -241,7 +242,7 @@ def main() -> None:
     print(f"quasi-dynamic: load average {os.getloadavg()[0]:.2f} before")
     start = time.process_time()  # the compiled kernels, loaded (or compiled) once
     simulate_quasi_dynamic(slab_body(Slab(elements=40)), LAW, DRIVE, duration=50.0,
-                           sample_rate=100.0, field_rate=10.0)
+                           sample_rate=100.0, field_times=record_times(50.0, 10.0))
     print(f"quasi-dynamic: the kernels loaded and a first run in {time.process_time() - start:.1f}"
           f" s")
     one_node()

@@ -215,7 +215,7 @@ def test_slow_loading_gives_the_quasi_static_succession() -> None:
     ratio_before = (quasi_static["T"] / quasi_static["N"]).values[sheared]
     law = RateState(a=0.002, b=0.0, dc=2e-6, mu0=friction)
     ds = qd.simulate_quasi_dynamic(qd.slab_body(slab), law, drive, duration=60.0,
-                                   sample_rate=10.0, field_rate=20.0)
+                                   sample_rate=10.0, field_times=qd.record_times(60.0, 20.0))
     after = _appearances(field_conditions(ds, slip_speed=1e-3 * drive.drive_speed), slab.x)
     ratio_after = np.interp(ds["field_time"], ds["time"], ds["T"] / ds["N"])
     # stick, a slip zone at the right edge, the right edge opening, the left edge slipping
@@ -247,7 +247,7 @@ def slab_run() -> xr.Dataset:
     """A 40-element slab driven into stick-slip."""
     return qd.simulate_quasi_dynamic(qd.slab_body(Slab(elements=40)), SLAB_LAW,
                                      qd.Drive(76.0, 0.048), duration=60.0, sample_rate=50.0,
-                                     field_rate=5.0)
+                                     field_times=qd.record_times(60.0, 5.0))
 
 
 def test_the_slab_sticks_then_slips_in_waves(slab_run: xr.Dataset) -> None:
@@ -274,6 +274,36 @@ def test_slipping_nodes_are_closed_and_fast(slab_run: xr.Dataset) -> None:
     fast = np.abs(fields["slip_rate"].values) > slab_run.attrs["front_speed"]
     assert (fields["contact"].values[fast] == 1).all()
     assert (fields["p"].values[fields["contact"].values == 0] == 0).all()
+
+
+def test_the_recorded_displacements_carry_the_recorded_stresses(slab_run: xr.Dataset) -> None:
+    # the contact's forces are the slab's stiffness times its displacements, node by node
+    body = qd.slab_body(Slab(elements=40))
+    u = np.concatenate([slab_run["ux"].values, slab_run["uy"].values], axis=1)
+    forces = u @ body.stiffness.T
+    closed = slab_run["contact"].values == 1
+    n = body.nodes
+    q = forces[:, :n] / body.tributary
+    p = forces[:, n:] / body.tributary
+    scale = float(np.abs(slab_run["p"]).max())
+    assert np.abs(q - slab_run["q"].values)[closed].max() < 1e-8 * scale
+    assert np.abs(p - slab_run["p"].values)[closed].max() < 1e-8 * scale
+    # a closed node sits on the flat: its normal displacement is the flat's approach less
+    # its gap
+    approach = np.interp(slab_run["field_time"], slab_run["time"], slab_run["approach"])
+    on_flat = approach[:, None] - body.initial_gap[None, :]
+    assert np.abs(slab_run["uy"].values - on_flat)[closed].max() < 1e-9
+
+
+def test_the_fields_are_recorded_when_asked() -> None:
+    body = qd.spring_slider_body(stiffness=1.0, normal_load=0.3, damping=1e-3)
+    asked = np.array([0.0, 0.125, 0.7])
+    ds = qd.simulate_quasi_dynamic(body, SLIDING, qd.Drive(0.3, 0.01), duration=1.0,
+                                   sample_rate=10.0, field_times=asked)
+    np.testing.assert_array_equal(ds["field_time"].values, asked)
+    with pytest.raises(SlipwaveError, match=r"field times must increase within 0 to 1\.0 s"):
+        qd.simulate_quasi_dynamic(body, SLIDING, qd.Drive(0.3, 0.01), duration=1.0,
+                                  sample_rate=10.0, field_times=np.array([0.5, 1.5]))
 
 
 def _crossings(x: np.ndarray, nodes: np.ndarray, rises: np.ndarray, falls: np.ndarray
@@ -334,7 +364,7 @@ def test_a_run_ends_between_two_field_records() -> None:
     # the last field record (0.5 s) before the end (0.95 s): the steps stop at the end
     body = qd.spring_slider_body(stiffness=1.0, normal_load=0.3, damping=1e-3)
     ds = qd.simulate_quasi_dynamic(body, SLIDING, qd.Drive(0.3, 0.01), duration=0.95,
-                                   sample_rate=20.0, field_rate=2.0)
+                                   sample_rate=20.0, field_times=qd.record_times(0.95, 2.0))
     assert ds["field_time"].values.tolist() == [0.0, 0.5]
     assert float(ds["time"][-1]) == pytest.approx(0.95)
     assert np.isfinite(ds["T"].values).all()

@@ -22,7 +22,12 @@ import xarray as xr
 
 from slipwave.setup import TestSetup
 from slipwave.solver.fronts import front_waves
-from slipwave.solver.quasi_dynamic import Drive, simulate_quasi_dynamic, slab_body
+from slipwave.solver.quasi_dynamic import (
+    Drive,
+    record_times,
+    simulate_quasi_dynamic,
+    slab_body,
+)
 from slipwave.solver.rate_state import RateState
 from slipwave.video.waves import MIN_EXTENT
 
@@ -118,12 +123,13 @@ def simulate_waves(setup: TestSetup, law: RateState, *, elements: int,
     (10.0, 0)
     """
     loading = setup["loading_time_s"]
+    driven = setup["duration_s"] - loading
     run = simulate_quasi_dynamic(
         slab_body(setup.slab(elements)), law,
         Drive(normal_load=setup["normal_load_n"], drive_speed=setup["speed_mm_s"],
               normal_control="force"),
-        duration=setup["duration_s"] - loading, sample_rate=sample_rate,
-        field_rate=field_rate)
+        duration=driven, sample_rate=sample_rate,
+        field_times=record_times(driven, field_rate))
     waves = front_waves(run, min_extent=MIN_EXTENT)
     waves[["t_start", "t_end"]] += loading
     run = run.assign_coords(time=run["time"] + loading, field_time=run["field_time"] + loading)

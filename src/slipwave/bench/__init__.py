@@ -3,6 +3,9 @@
 - :mod:`slipwave.bench.generate`: one test (:class:`BenchTest`,
   :func:`simulate_test`, :func:`write_test`) or a campaign
   (:func:`write_campaign`, the ``slipwave bench`` command), with the truth.
+- :mod:`slipwave.bench.quasi_dynamic`: a test made with the quasi-dynamic contact
+  under a rate-and-state law (a :class:`BenchTest` with ``rate_state``), its waves'
+  speeds the physics'.
 - :mod:`slipwave.bench.sensors`: what real sensors add to the noise-free signals
   of :mod:`slipwave.solver.signals`.
 - :mod:`slipwave.bench.camera`: the frames of :mod:`slipwave.photoelastic` written

@@ -73,6 +73,12 @@ class BenchTest:
     the contact) are listed in the truth as not visible. ``edge_convention`` is
     how the card's edge sensors read: both along +x, or each its own edge's
     outward displacement (the paper's bench: the left sensor's sign is turned).
+
+    With ``rate_state`` (the workflow's ``simulate_waves`` keys: ``a``, ``b``,
+    ``dc_um``, ``mu0``, ``v0_um_s``) the interface follows that rate-and-state law
+    instead, and the test is made with the quasi-dynamic contact
+    (:mod:`slipwave.bench.quasi_dynamic`): its waves' speeds are the physics', and
+    ``wave_speed``, ``machine_stiffness`` and the Coulomb coefficients are not used.
     """
 
     test_id: str
@@ -88,6 +94,7 @@ class BenchTest:
     runin_slips: float = 4
     fs_peak: float | None = None
     dc: float | None = None
+    rate_state: dict[str, float] | None = None
     normal_load: float = 85.0
     speed: float = 0.048
     duration: float = 280.0
@@ -208,6 +215,9 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
                   sensors: Mapping[str, Sensor] | None = None) -> BenchResult:
     """Generate one test in memory: recording, truth and a frame iterator.
 
+    A test with a rate-and-state law is made quasi-dynamically
+    (:func:`slipwave.bench.quasi_dynamic.simulate_quasi_dynamic_test`).
+
     Parameters
     ----------
     spec
@@ -234,6 +244,11 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     >>> result.recording.attrs["test_id"], result.recording.sizes["time"]
     ('demo', 4000)
     """
+    if spec.rate_state is not None:
+        # the quasi-dynamic test builds on this module's BenchTest, BenchResult and truth
+        from slipwave.bench.quasi_dynamic import simulate_quasi_dynamic_test
+        return simulate_quasi_dynamic_test(spec, seed=seed, memory_limit_gb=memory_limit_gb,
+                                           sensors=sensors)
     slab = spec.slab()
     require_memory(simulation_memory(slab, spec.load_path(),
                                      samples=spec.duration * spec.sample_rate,
@@ -261,7 +276,7 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
         "Conventions": CONVENTIONS,
     }
     events = _events(spec, simulation)
-    phases = _phases(spec, events, clean["time"].values)
+    phases = sample_phases(spec, events, clean["time"].values)
     camera_end = (spec.duration - spec.camera.clock_offset) / (1 + spec.camera.clock_rate_error)
     frame_times = np.arange(0.0, camera_end, 1.0 / spec.camera.fps)
     frame_times = frame_times[spec.camera.acquisition_time(frame_times) >= 0.0]
@@ -323,16 +338,43 @@ def _events(spec: BenchTest, simulation: xr.Dataset) -> pd.DataFrame:
 
 def _camera_truth(spec: BenchTest, simulation: xr.Dataset, events: pd.DataFrame,
                   frame_times: np.ndarray) -> pd.DataFrame:
+    """The camera's view of the quasi-static waves: each one's displacements either side."""
+    before = [np.concatenate([simulation["ux_before_wave"].values[step],
+                              simulation["uy_before_wave"].values[step]])
+              for step in events["step"]]
+    after = [np.concatenate([simulation["ux"].values[step], simulation["uy"].values[step]])
+             for step in events["step"]]
+    return camera_truth(spec, events, before, after, frame_times)
+
+
+def camera_truth(spec: BenchTest, events: pd.DataFrame, before: Sequence[np.ndarray],
+                 after: Sequence[np.ndarray], frame_times: np.ndarray) -> pd.DataFrame:
     """What the camera can see of each wave: its image change, frames and visibility.
 
     ``camera_change`` is the mean absolute change of the noise-free fringe
     intensity (8-bit grey levels) that the wave makes in the kymograph's band
     (:data:`slipwave.defaults.BAND_MM` above the interface), over its slipped
     range; ``camera_frames`` the number of frames taken while it runs. A wave is
-    ``camera_visible`` when its change is
-    at least ``CAMERA_SNR`` times the sensor noise and its front shows in at
-    least ``CAMERA_FRAMES`` frames (fewer, and neither its direction nor its
-    extent can be measured). Without a video, none is.
+    ``camera_visible`` when its change is at least ``CAMERA_SNR`` times the sensor
+    noise and its front shows in at least ``CAMERA_FRAMES`` frames (fewer, and neither
+    its direction nor its extent can be measured). Without a video, none is.
+
+    Parameters
+    ----------
+    spec
+        The test.
+    events
+        Its waves: ``t_start``, ``t_end`` (s, the card's clock), ``x_min``, ``x_max`` (mm).
+    before, after
+        Each wave's contact displacements ``[ux, uy]`` (mm) before and after it.
+    frame_times
+        The frames' camera timestamps, s.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``events`` with ``camera_change``, ``camera_frames`` and ``camera_visible``.
+
     """
     events = events.copy()
     if spec.video == "none":
@@ -346,12 +388,10 @@ def _camera_truth(spec: BenchTest, simulation: xr.Dataset, events: pd.DataFrame,
     band = (height >= BAND_MM[0]) & (height <= BAND_MM[1])
     x = camera.pixel_x[band]
     changes = []
-    for step, low, high in zip(events["step"], events["x_min"], events["x_max"], strict=True):
-        before = np.concatenate([simulation["ux_before_wave"].values[step],
-                                 simulation["uy_before_wave"].values[step]])
-        after = np.concatenate([simulation["ux"].values[step], simulation["uy"].values[step]])
+    for u_before, u_after, low, high in zip(before, after, events["x_min"], events["x_max"],
+                                            strict=True):
         shown = [np.sin(np.pi * camera.fringe_order(camera.stress(u)[:, band])) ** 2
-                 for u in (before, after)]
+                 for u in (u_before, u_after)]
         swept = (x >= low) & (x <= high)
         difference = np.abs(shown[1] - shown[0])[swept] * spec.camera.intensity
         changes.append(float(difference.mean()) if swept.any() else 0.0)
@@ -365,7 +405,25 @@ def _camera_truth(spec: BenchTest, simulation: xr.Dataset, events: pd.DataFrame,
     return events
 
 
-def _phases(spec: BenchTest, events: pd.DataFrame, time: np.ndarray) -> pd.DataFrame:
+def sample_phases(spec: BenchTest, events: pd.DataFrame, time: np.ndarray) -> pd.DataFrame:
+    """Each sample's phase: normal loading, stick, or within a visible wave.
+
+    Parameters
+    ----------
+    spec
+        The test.
+    events
+        Its waves (``kind``, ``t_start``, ``t_end``, ``visible``).
+    time
+        The samples' times, s.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``time`` and ``phase`` (``normal_loading``, ``stick``, ``partial_slip``,
+        ``gross_slip``; a gross slip wins where both overlap).
+
+    """
     phase = np.where(time < spec.loading_time, "normal_loading", "stick").astype(object)
     if not events.empty:
         for kind in ("partial_slip", "gross_slip"):  # gross wins where both overlap

@@ -389,7 +389,7 @@ def simulate_quasi_dynamic(
     *,
     duration: float,
     sample_rate: float,
-    field_rate: float | None = None,
+    field_times: np.ndarray | None = None,
     front_speed: float | None = None,
     tolerance: float = TOLERANCE,
 ) -> xr.Dataset:
@@ -414,9 +414,9 @@ def simulate_quasi_dynamic(
         The driven time, s (the record starts when the drive does).
     sample_rate
         Records of the loads and sensors per second.
-    field_rate
-        Records of the nodes' slip rate, state and stresses per second; ``sample_rate``
-        by default.
+    field_times
+        When to record the nodes' fields, s from the drive's start (increasing, within
+        the duration; :func:`record_times` for a rate); the samples' times by default.
     front_speed
         The slip rate, mm/s, above which a node counts as slipping (a front's passage is
         the time it crosses it); :data:`FRONT_SPEED_RATIO` times the drive's by default.
@@ -429,10 +429,11 @@ def simulate_quasi_dynamic(
         Over ``time``: ``T``, ``N`` (N), ``DT`` (the flat's travel), ``approach`` (its
         normal position) and, for a slab, ``DG``, ``DD`` (mm). Over ``field_time`` and
         ``x``: ``slip_rate`` (mm/s), ``log_state`` (ln theta, theta in s), ``p``, ``q``
-        (MPa) and ``contact`` (1 closed). Over ``crossing``: each node's slip rate passing
-        ``front_speed``, its ``crossing_x``, ``crossing_time`` and ``crossing_rising``
-        (1 a front arriving, 0 the node sticking again). Steps, evaluations and contact
-        changes as attributes.
+        (MPa), ``contact`` (1 closed) and the displacements ``ux``, ``uy`` (mm, as the
+        quasi-static solver's, from which the slab's stresses follow). Over
+        ``crossing``: each node's slip rate passing ``front_speed``, its ``crossing_x``,
+        ``crossing_time`` and ``crossing_rising`` (1 a front arriving, 0 the node
+        sticking again). Steps, evaluations and contact changes as attributes.
 
     Raises
     ------
@@ -442,11 +443,14 @@ def simulate_quasi_dynamic(
     if not (duration > 0 and sample_rate > 0 and tolerance > 0):
         raise SlipwaveError(f"duration, sample rate and tolerance must be > 0, got "
                             f"{duration}, {sample_rate}, {tolerance}")
-    field_rate = sample_rate if field_rate is None else field_rate
+    sample_times = record_times(duration, sample_rate)
+    field_times = sample_times if field_times is None else np.asarray(field_times, dtype=float)
     front_speed = FRONT_SPEED_RATIO * drive.drive_speed if front_speed is None else front_speed
-    if not (field_rate > 0 and front_speed > 0):
-        raise SlipwaveError(f"field rate and front speed must be > 0, got {field_rate}, "
-                            f"{front_speed}")
+    if not front_speed > 0:
+        raise SlipwaveError(f"the front speed must be > 0, got {front_speed}")
+    if field_times.ndim != 1 or not (np.all(np.diff(field_times) > 0) and (
+            field_times.size == 0 or (field_times[0] >= 0 and field_times[-1] <= duration))):
+        raise SlipwaveError(f"the field times must increase within 0 to {duration} s")
     n = body.nodes
     state_count = len(states(law))
     smallest_dc = min(dc for _, dc in states(law)) * MM_PER_M
@@ -457,7 +461,7 @@ def simulate_quasi_dynamic(
     y[::stride] = u[:n]
     flat = _flat_row(drive, dy, body.width)
     contact = _reduce(body, closed, flat)
-    record = _Record(_times(duration, sample_rate), _times(duration, field_rate), n,
+    record = _Record(sample_times, field_times, n,
                      contact.reduction.readouts_x.size + 2)
     scales = (tolerance * normal_w / n, tolerance * smallest_dc)
     atol = np.full(n * stride, tolerance)
@@ -505,8 +509,28 @@ def simulate_quasi_dynamic(
     return _to_dataset(body, law, drive, record, counts, front_speed)
 
 
-def _times(duration: float, rate: float) -> np.ndarray:
-    """Record times from 0 to the duration at a rate."""
+def record_times(duration: float, rate: float) -> np.ndarray:
+    """Times from 0 to the duration at a rate, both ends included where they fall on it.
+
+    Parameters
+    ----------
+    duration
+        s.
+    rate
+        Records per second.
+
+    Returns
+    -------
+    numpy.ndarray
+        The times, s.
+
+    Examples
+    --------
+    >>> record_times(1.0, 4.0)
+    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+    """
+    if not (duration > 0 and rate > 0):
+        raise SlipwaveError(f"duration and rate must be > 0, got {duration}, {rate}")
     return np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
 
 
@@ -529,7 +553,7 @@ class _Record:
     def __init__(self, sample_times: np.ndarray, field_times: np.ndarray, nodes: int,
                  readouts: int) -> None:
         self.sample_times, self.field_times = sample_times, field_times
-        self.fields = np.zeros((5, field_times.size, nodes))
+        self.fields = np.zeros((7, field_times.size, nodes))
         self.next_field = 0
         buffer = _CROSSINGS_BUFFER * nodes
         self.steps_record = stretch_steps.Record(
@@ -604,17 +628,17 @@ def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: floa
 
 
 def _fields(stretch: _Stretch, body: ContactBody, t: float, y: np.ndarray) -> np.ndarray:
-    """The nodes' slip rate, ln theta (the first state's), p, q and contact at state y."""
+    """The nodes' slip rate, ln theta (the first state's), p, q, contact, ux and uy at y."""
     n = body.nodes
     stride = 1 + stretch.law.b.size
     closed = stretch.reduction.closed
-    _, r, _, _ = _state_at(body, stretch.contact, t, y, stride)
+    u, r, _, _ = _state_at(body, stretch.contact, t, y, stride)
     speed = np.zeros(n)
     speed[closed] = stretch.step_end(t, y)[1]
     contact = np.zeros(n)
     contact[closed] = 1.0
     return np.stack([speed, y[1::stride], r[n:] / body.tributary, r[:n] / body.tributary,
-                     contact])
+                     contact, u[:n], u[n:]])
 
 
 def _to_dataset(body: ContactBody, law: RateState, drive: Drive, record: _Record,
@@ -637,7 +661,9 @@ def _to_dataset(body: ContactBody, law: RateState, drive: Drive, record: _Record
     field_names = (("slip_rate", "mm s-1", "slip rate of the slab on the flat"),
                    ("log_state", "1", "natural logarithm of the state theta in s"),
                    ("p", "MPa", "contact pressure"), ("q", "MPa", "shear stress"),
-                   ("contact", "1", "1 where the node is on the flat"))
+                   ("contact", "1", "1 where the node is on the flat"),
+                   ("ux", "mm", "tangential displacement of the slab's contact node"),
+                   ("uy", "mm", "normal displacement of the slab's contact node"))
     for (name, unit, long_name), values in zip(field_names, fields, strict=True):
         data[name] = (("field_time", "x"), values, {"units": unit, "long_name": long_name})
     data["crossing_x"] = ("crossing", body.x[crossing_node], {"units": "mm"})
