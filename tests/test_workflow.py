@@ -104,17 +104,21 @@ def test_full_run_on_default_campaign(workdir):
         assert (workdir / f"reports/{test_id}.pdf").read_bytes().startswith(b"%PDF")
         comparison = pd.read_csv(workdir / f"results/{test_id}/comparison.csv", comment="#")
         assert set(comparison["verdict"]) <= {"agrees", "differs", "not compared"}
-        assert len(comparison) == 18
-        # every filmed test's waves against its quasi-dynamic run's, each row judged
+        assert len(comparison) == 19
+        # every filmed test's waves against its quasi-dynamic run's film's, rows judged
         waves_rows = comparison[comparison["feature"].str.endswith("(video vs quasi-dynamic)")]
-        assert len(waves_rows) == 5
+        assert len(waves_rows) == 6
         assert waves_rows["verdict"].isin(["agrees", "differs"]).sum() >= 4
         assert "The waves simulated quasi-dynamically" in page
+        assert "filmed by the virtual bench's" in page
         # the page says the run's mesh, and that this test's convergence is not checked
         assert "The run has 40 elements along the contact" in page
-        simulated_waves = pd.read_csv(workdir / f"results/{test_id}/simulated/waves.csv",
-                                      comment="#")
-        assert len(simulated_waves) > 0 and (simulated_waves["speed"] > 0).all()
+        simulated = workdir / f"results/{test_id}/simulated"
+        fronts = pd.read_csv(simulated / "fronts.csv", comment="#")
+        assert len(fronts) > 0 and (fronts["speed"] > 0).all()
+        filmed = pd.read_csv(simulated / "waves.csv", comment="#")
+        film = read_dataset(simulated / "kymograph.nc")
+        assert len(filmed) > 0 and film.sizes["time"] > 6000
         fit = json.loads((workdir / f"results/{test_id}/fit.json").read_text())
         assert fit["setup"]["edge_reference"] == "frame" and fit["chosen"] == "coulomb"
         for rule in ("ingest", "detect", "kymograph", "waves", "report", "fit", "simulate",

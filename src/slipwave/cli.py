@@ -406,19 +406,26 @@ def _report(args: argparse.Namespace) -> None:
     contact = None if args.contact is None else read_dataset(args.contact, "contact history")
     quasi_dynamic = (None if args.quasi_dynamic is None
                      else read_dataset(args.quasi_dynamic, "quasi-dynamic run"))
-    if (quasi_dynamic is None) != (args.simulated_waves is None):
-        raise SlipwaveError("--quasi-dynamic and --simulated-waves go together")
+    simulated_film = (None if args.simulated_film is None
+                      else read_dataset(args.simulated_film, "kymograph"))
+    given = [value is not None for value in (quasi_dynamic, args.simulated_waves,
+                                             args.simulated_fronts, simulated_film)]
+    if any(given) and not all(given):
+        raise SlipwaveError("--quasi-dynamic, --simulated-waves, --simulated-fronts and "
+                            "--simulated-film go together")
     compared = {} if args.comparison_json is None else read_comparison(args.comparison_json)
     tables = {option: None if path is None else read_table(path) for option, path in [
         ("waves", args.waves), ("fused", args.fused), ("comparison", args.comparison),
         ("simulated_events", args.simulated_events),
-        ("simulated_waves", args.simulated_waves)]}
+        ("simulated_waves", args.simulated_waves),
+        ("simulated_fronts", args.simulated_fronts)]}
     check_same_test([(args.recording, recording.attrs)] + [
         (path, content) for path, content in [
             (args.events, None if events is None else events.attrs), (args.fit, fit),
             (args.simulated, None if simulated is None else simulated.attrs),
             (args.contact, None if contact is None else contact.attrs),
             (args.quasi_dynamic, None if quasi_dynamic is None else quasi_dynamic.attrs),
+            (args.simulated_film, None if simulated_film is None else simulated_film.attrs),
             (args.comparison_json, compared or None),
             *[(getattr(args, option), None if table is None else table.attrs)
               for option, table in tables.items()]] if content is not None])
@@ -430,7 +437,8 @@ def _report(args: argparse.Namespace) -> None:
         kymo = read_dataset(args.kymograph, "kymograph")
         clock = read_clock(args.clock)
         video = video_summary(kymo, tables["waves"], clock, args.frames, events,
-                              tables["fused"], quasi_dynamic, tables["simulated_waves"])
+                              tables["fused"], quasi_dynamic, tables["simulated_waves"],
+                              tables["simulated_fronts"], simulated_film)
     pairing = None
     if fit is not None or simulated is not None:
         behaviour_map = None if args.map is None else read_dataset(args.map, "behaviour map")
@@ -590,27 +598,43 @@ def _simulate_test(args: argparse.Namespace) -> None:
 
 
 def _simulate_waves(args: argparse.Namespace) -> None:
+    import numpy as np
+
     from slipwave.fit import read_fit
-    from slipwave.identity import stamp
-    from slipwave.io import write_dataset, write_table
+    from slipwave.identity import check_same_test, stamp
+    from slipwave.io import read_dataset, write_dataset, write_table
     from slipwave.setup import TestSetup
     from slipwave.simulate_waves import rate_state_law, simulate_waves
 
     fit = read_fit(args.fit)
     setup = TestSetup.from_dict(fit["setup"])
+    video = read_dataset(args.kymograph, "kymograph")
+    if video.attrs.get("test_id"):
+        check_same_test([(args.fit, fit), (args.kymograph, video.attrs)], keys=("test_id",))
+    times = video["time"].values
+    if times.size < 2:
+        raise SlipwaveError(f"{args.kymograph}: fewer than two frames, no frame rate")
+    frame_rate = 1.0 / float(np.median(np.diff(times)))
+    band = tuple(float(value) for value in video.attrs["band_mm"])
     law = rate_state_law({"a": args.a, "b": args.b, "dc_um": args.dc_um, "mu0": args.mu0,
                           "v0_um_s": args.v0_um_s})
-    run, waves = simulate_waves(setup, law, elements=args.elements,
-                                field_rate=args.field_rate, sample_rate=args.sample_rate)
-    stamp(run.attrs, "quasi-dynamic run", fit)
-    write_dataset(run, args.output)
-    write_table(waves, args.waves, fit)
-    speeds = waves["speed"].dropna()
-    print(f"{args.fit} -> {args.output}: {setup.test_id} under the {run.attrs['law_text']}, "
-          f"{args.elements} elements: {len(waves)} "
-          f"waves, median front speed "
-          f"{f'{speeds.median():.0f} mm/s' if len(speeds) else 'none'}; "
-          f"{run.attrs['steps']} steps")
+    result = simulate_waves(setup, law, elements=args.elements, field_rate=args.field_rate,
+                            sample_rate=args.sample_rate, frame_rate=frame_rate,
+                            band_mm=(band[0], band[1]))
+    stamp(result.run.attrs, "quasi-dynamic run", fit)
+    stamp(result.film.attrs, "kymograph", fit)
+    write_dataset(result.run, args.output)
+    write_dataset(result.film, args.film)
+    write_table(result.waves, args.waves, fit)
+    write_table(result.fronts, args.fronts, fit)
+    speeds = result.waves["speed"].dropna()
+    fronts = result.fronts["speed"].dropna()
+    print(f"{args.fit} -> {args.output}: {setup.test_id} under the "
+          f"{result.run.attrs['law_text']}, {args.elements} elements, filmed at "
+          f"{frame_rate:.4g} frames/s: {len(result.waves)} waves on the film, median speed "
+          f"{f'{speeds.median():.0f} mm/s' if len(speeds) else 'none'}; {len(result.fronts)} "
+          f"slip-rate fronts, median {f'{fronts.median():.0f} mm/s' if len(fronts) else 'none'}; "
+          f"{result.run.attrs['steps']} steps")
 
 
 def _map_row(args: argparse.Namespace) -> None:
@@ -922,7 +946,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="with --kymograph: the test run quasi-dynamically ('slipwave "
                         "simulate-waves -o'), its fronts shown beside the video's")
     report.add_argument("--simulated-waves", type=_input, default=None,
-                        help="its waves ('slipwave simulate-waves --waves')")
+                        help="its film's waves ('slipwave simulate-waves --waves')")
+    report.add_argument("--simulated-fronts", type=_input, default=None,
+                        help="its slip-rate fronts ('slipwave simulate-waves --fronts')")
+    report.add_argument("--simulated-film", type=_input, default=None,
+                        help="its film's kymograph ('slipwave simulate-waves --film')")
     report.add_argument("--pdf", type=Path, default=None, help="also print the page to PDF")
     report.add_argument("--threads", type=_positive_int, default=1,
                         help="processes to draw the figures on (default 1)")
@@ -1009,8 +1037,9 @@ def build_parser() -> argparse.ArgumentParser:
         "simulate-waves",
         help="simulate a filmed test quasi-dynamically: its waves with a speed",
         description="Run the test's slab, normal load and drive through the quasi-dynamic "
-        "contact under a rate-and-state law (aging), and write the run (netCDF) and its "
-        "waves in the video's columns (CSV), on the test's clock.")
+        "contact under a rate-and-state law (aging), film it at the video's frame rate, "
+        "and write the run and its film (netCDF), the film's waves and the run's slip-rate "
+        "fronts in the video's columns (CSV), on the test's clock.")
     waves_sim.add_argument("--fit", type=_input, required=True,
                            help="the test's fit.json (its setup and identity)")
     for name, unit in (("a", ""), ("b", ""), ("dc_um", ", um"), ("mu0", ""),
@@ -1028,10 +1057,16 @@ def build_parser() -> argparse.ArgumentParser:
     waves_sim.add_argument("--sample-rate", type=_positive_float,
                            default=default.SAMPLE_RATE_HZ,
                            help="records of the loads and sensors per second (%(default)s)")
+    waves_sim.add_argument("--kymograph", type=_input, required=True,
+                           help="the test's video's kymograph (its frame rate and band)")
     waves_sim.add_argument("-o", "--output", type=Path, required=True,
                            help="netCDF of the run")
+    waves_sim.add_argument("--film", type=Path, required=True,
+                           help="netCDF of the run's film's kymograph")
     waves_sim.add_argument("--waves", type=Path, required=True,
-                           help="CSV of its waves (the video's columns)")
+                           help="CSV of the film's waves (the video's columns)")
+    waves_sim.add_argument("--fronts", type=Path, required=True,
+                           help="CSV of the run's slip-rate fronts (the video's columns)")
     waves_sim.set_defaults(run=_simulate_waves)
 
     mapping = commands.add_parser(

@@ -270,8 +270,11 @@ FIRST_WAVE_START = Feature("first wave: where it began (video vs quasi-dynamic)"
                            ORIGIN.tolerance)
 WHOLE_CONTACT = Feature("share of waves over the whole contact (video vs quasi-dynamic)",
                         "1", 0.0)
+FOLLOWED = Feature("share of waves the camera could follow (video vs quasi-dynamic)", "1",
+                   0.0)
 WAVE_FEATURES = (WAVE_SPEED.name, WAVE_SPEED_SPREAD.name, FIRST_WAVE_START.name,
-                 "first wave: the way it ran (video vs quasi-dynamic)", WHOLE_CONTACT.name)
+                 "first wave: the way it ran (video vs quasi-dynamic)", WHOLE_CONTACT.name,
+                 FOLLOWED.name)
 """The rows of :func:`compare_waves`, in order."""
 
 
@@ -306,13 +309,15 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
     """The video's waves against a simulation's, one row per feature.
 
     Both tables are in :data:`slipwave.io.tables.WAVE_COLUMNS` (the video's
-    :func:`slipwave.video.track_waves`, a quasi-dynamic simulation's
-    :func:`slipwave.solver.fronts.front_waves`). The wave speed's median and
+    :func:`slipwave.video.track_waves`, a quasi-dynamic simulation's). The wave speed's median and
     interquartile range agree when they differ by at most twice their standard error
     from the two samples (:data:`MEDIAN_ERROR`, :data:`QUARTILES_ERROR`); the first
     wave's start within the video's origin tolerance (:data:`ORIGIN`), its way when the
-    same; the share of waves that sweep the whole contact (``kind`` gross) within twice
-    its binomial standard error from both samples.
+    same; the share of waves that sweep the whole contact (``kind`` gross), and the share
+    the camera could follow (not ``unresolved``), each within twice its binomial standard
+    error from both samples. Compare waves measured alike: a simulation filmed
+    (:func:`slipwave.simulate_waves.film_kymograph`), whose fronts faster than the frames
+    show as the camera shows them.
 
     Parameters
     ----------
@@ -333,7 +338,7 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
     ...                       "kind": ["partial", "gross", "partial", "gross"]})
     >>> simulated = video.assign(speed=[6000.0, 6500.0, 5800.0, 7000.0])
     >>> compare_waves(video, simulated).set_index("feature")["verdict"].tolist()
-    ['differs', 'agrees', 'agrees', 'agrees', 'agrees']
+    ['differs', 'agrees', 'agrees', 'agrees', 'agrees', 'agrees']
     """
     resolved = [table[table["kind"] != "unresolved"] for table in (measured, simulated)]
     speeds = [table["speed"].to_numpy(dtype=float) for table in resolved]
@@ -350,9 +355,19 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
                  "verdict": ("agrees" if ways[0] == ways[1] else "differs")
                  if ways[0] and ways[1] else "not compared",
                  "note": "" if ways[0] and ways[1] else "no wave"})
-    shares = [float((table["kind"] == "gross").mean()) if len(table) else float("nan")
-              for table in (measured, simulated)]
-    sizes = [len(measured), len(simulated)]
+    rows.append(_share_row(WHOLE_CONTACT, [table["kind"] == "gross"
+                                           for table in (measured, simulated)]))
+    # a slip faster than the frames is one the tracker cannot follow: its speed is not a
+    # front's, so the share it follows tells fast fronts from slow ones
+    rows.append(_share_row(FOLLOWED, [table["kind"] != "unresolved"
+                                      for table in (measured, simulated)]))
+    return pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
+
+
+def _share_row(feature: Feature, counted: list[pd.Series]) -> dict[str, Any]:
+    """The share of waves counted on each side, within twice its binomial standard error."""
+    shares = [float(flags.mean()) if len(flags) else float("nan") for flags in counted]
+    sizes = [len(flags) for flags in counted]
     tolerance = float("nan")
     if min(sizes):
         pooled = (shares[0] * sizes[0] + shares[1] * sizes[1]) / (sizes[0] + sizes[1])
@@ -360,9 +375,7 @@ def compare_waves(measured: pd.DataFrame, simulated: pd.DataFrame) -> pd.DataFra
         pooled = min(max(pooled, 1.0 / sum(sizes)), 1.0 - 1.0 / sum(sizes))
         tolerance = 2.0 * float(np.sqrt(pooled * (1 - pooled)
                                         * (1.0 / sizes[0] + 1.0 / sizes[1])))
-    rows.append(_row(WHOLE_CONTACT, shares[0], shares[1], 0.0, unknown="no wave",
-                     tolerance=tolerance))
-    return pd.DataFrame(rows, columns=list(COMPARISON_COLUMNS))
+    return _row(feature, shares[0], shares[1], 0.0, unknown="no wave", tolerance=tolerance)
 
 
 def compare_test(measured: pd.DataFrame, simulated_recording: xr.Dataset,

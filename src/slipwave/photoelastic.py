@@ -91,16 +91,24 @@ class Photoelastic:
         The slab the solver ran.
     camera
         The camera.
+    below
+        Image only the slab's pixels within this height of the interface, mm (the rest
+        shows the background): a film of the band a kymograph reads, computed from the
+        mesh's rows there alone. ``None``: the whole slab.
     """
 
-    def __init__(self, slab: Slab, camera: Camera) -> None:
+    def __init__(self, slab: Slab, camera: Camera, *, below: float | None = None) -> None:
         self.slab = slab
         self.camera = camera
         recovery = displacement_recovery(slab)
-        self.grid_x, self.grid_y = recovery.x, recovery.y
-        n_rows, n_columns = recovery.ux.shape[:2]
-        self._ux = recovery.ux.reshape(n_rows * n_columns, -1)
-        self._uy = recovery.uy.reshape(n_rows * n_columns, -1)
+        # the mesh's rows up to two beyond the height imaged: the stresses averaged to the
+        # nodes the pixels use are then the whole mesh's
+        kept = recovery.y.size if below is None else min(
+            int(np.searchsorted(recovery.y, below)) + 3, recovery.y.size)
+        self.grid_x, self.grid_y = recovery.x, recovery.y[:kept]
+        n_rows, n_columns = kept, recovery.ux.shape[1]
+        self._ux = recovery.ux[:kept].reshape(n_rows * n_columns, -1)
+        self._uy = recovery.uy[:kept].reshape(n_rows * n_columns, -1)
         self._shape = (n_rows, n_columns)
         nu = slab.poisson_ratio
         E = slab.youngs_modulus
@@ -120,6 +128,8 @@ class Photoelastic:
         y = (self.interface_row - rows) / self.scale
         X, Y = np.meshgrid(x, y)
         self.inside = (np.abs(X) < slab.length / 2) & (Y > 0) & (slab.height > Y)
+        if below is not None:
+            self.inside &= below >= Y
         px, py = X[self.inside], Y[self.inside]
         ex = np.clip(np.searchsorted(self.grid_x, px) - 1, 0, self.grid_x.size - 2)
         ey = np.clip(np.searchsorted(self.grid_y, py) - 1, 0, self.grid_y.size - 2)

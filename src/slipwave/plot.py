@@ -257,7 +257,7 @@ def plot_zones(simulation: xr.Dataset, *, vertical: str = "T") -> Figure:
 
 def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
                    window: tuple[float, float] | None = None) -> Figure:
-    """The band's change along the contact against camera time, tracked fronts on it.
+    """The band's change along the contact against its time, tracked fronts on it.
 
     Each wave is drawn as its front's straight path (from ``x_start`` at
     ``t_start`` to ``x_end`` at ``t_end``) with its direction's colour; a
@@ -302,7 +302,8 @@ def plot_kymograph(kymo: xr.Dataset, waves: pd.DataFrame | None = None, *,
                         color=WAVE_COLOURS[wave["direction"]], lw=1.2)
         ax.legend(handles=[Patch(color=c, label=d.replace("_", " "))
                            for d, c in WAVE_COLOURS.items()], fontsize=7, loc="upper right")
-    ax.set_xlabel("camera time [s]")
+    # the video's camera time, or a simulated film's test clock
+    ax.set_xlabel(f"{kymo['time'].attrs.get('long_name', 'camera time')} [s]")
     ax.set_ylabel("x along the contact [mm]")
     ax.set_title("change of the band above the interface since the previous frame, and the "
                  "tracked fronts", fontsize=9, loc="left")

@@ -157,6 +157,8 @@ def video_summary(
     fused: pd.DataFrame | None = None,
     quasi_dynamic: xr.Dataset | None = None,
     simulated_waves: pd.DataFrame | None = None,
+    simulated_fronts: pd.DataFrame | None = None,
+    simulated_film: xr.Dataset | None = None,
 ) -> dict[str, Any]:
     """The page's video section: kymograph with fronts, frames around the first gross slip.
 
@@ -175,9 +177,10 @@ def video_summary(
     fused
         From :func:`slipwave.video.fuse` (``events_video.csv``): how the load
         events and the waves pair, and whether their kinds agree.
-    quasi_dynamic, simulated_waves
-        The test run quasi-dynamically and its waves (``slipwave simulate-waves``), shown
-        beside the video's; ``None``: not shown.
+    quasi_dynamic, simulated_waves, simulated_fronts, simulated_film
+        The test run quasi-dynamically, its film's waves, its slip-rate fronts and its
+        film's kymograph (``slipwave simulate-waves``), shown beside the video's;
+        ``None``: not shown.
 
     Returns
     -------
@@ -185,7 +188,8 @@ def video_summary(
         Figures (matplotlib, drawn by :func:`render_test_page`), frames, wave
         counts and directions, median front speed, the clock, the first gross
         slip's time and the pairing; with a quasi-dynamic run, ``simulated`` (its law,
-        waves, elements, median front speed and figure).
+        elements, its film's waves and their median speed, its slip-rate fronts and
+        theirs, and the two figures).
 
     """
     figures = [plot_kymograph(kymo, waves)]
@@ -211,14 +215,22 @@ def video_summary(
                    "video": int(source.get("video", 0)), "judged": int(agrees.size),
                    "agree": int(agrees.sum())}
     simulated = None
-    if quasi_dynamic is not None and simulated_waves is not None:
-        speeds = simulated_waves["speed"].dropna()
+    if (quasi_dynamic is not None and simulated_waves is not None
+            and simulated_fronts is not None and simulated_film is not None):
+        filmed = simulated_waves[simulated_waves["kind"] != "unresolved"]
+        speeds = filmed["speed"].dropna()
+        fronts = simulated_fronts["speed"].dropna()
         simulated = {"law": str(quasi_dynamic.attrs.get("law_text",
                                                          quasi_dynamic.attrs.get("law", ""))),
-                     "waves": len(simulated_waves),
+                     "waves": len(filmed),
+                     "unresolved": len(simulated_waves) - len(filmed),
+                     "fronts": len(simulated_fronts),
                      "elements": quasi_dynamic.sizes["x"] - 1,
+                     "frame_rate": float(simulated_film.attrs.get("frame_rate", float("nan"))),
                      "speed": float(speeds.median()) if len(speeds) else float("nan"),
-                     "figure": plot_simulated_fronts(quasi_dynamic, simulated_waves)}
+                     "front_speed": float(fronts.median()) if len(fronts) else float("nan"),
+                     "film": plot_kymograph(simulated_film, simulated_waves),
+                     "figure": plot_simulated_fronts(quasi_dynamic, simulated_fronts)}
     return {
         "simulated": simulated,
         "figures": figures,
@@ -493,7 +505,7 @@ def _drawn(video: dict[str, Any] | None, pairing: dict[str, Any] | None,
         slots.append((video, "frames"))
         if video.get("simulated") is not None:
             video["simulated"] = dict(video["simulated"])
-            slots.append((video["simulated"], "figure"))
+            slots += [(video["simulated"], "film"), (video["simulated"], "figure")]
     if pairing is not None:
         pairing = {**pairing, "figures": dict(pairing["figures"])}
         slots += [(pairing["figures"], key) for key in pairing["figures"]]

@@ -3,23 +3,31 @@
 The simulate stage's solver is quasi-static: its slips have no duration and its waves no
 speed. Here the test's slab, normal load and drive are run through the quasi-dynamic
 contact (:func:`slipwave.solver.quasi_dynamic.simulate_quasi_dynamic`) under a
-rate-and-state law, and its waves are read from its fronts
-(:func:`slipwave.solver.fronts.front_waves`) in the video's columns, on the test's clock
-(the drive starts when the normal loading ends), so that the compare stage sets them
-beside the video's (:func:`slipwave.compare.compare_waves`).
+rate-and-state law, on the test's clock (the drive starts when the normal loading ends).
+The run is then filmed at the video's frame rate by the virtual bench's camera and its
+waves tracked on the film as the video's are (:func:`film_kymograph`,
+:func:`slipwave.video.track_waves`): those are what the compare stage sets beside the
+video's (:func:`slipwave.compare.compare_waves`), measured alike. The run's slip-rate
+fronts (:func:`slipwave.solver.fronts.front_waves`) are kept beside them: on slow fronts
+the two measures differ by a factor of two (docs, the bench page).
 
 What it leaves out, as the solver does: the actuator's machine spring (the flat's travel
-is prescribed at the test's speed) and the slab's inertia beyond radiation damping.
+is prescribed at the test's speed) and the slab's inertia beyond radiation damping; and
+the test's own camera (the film is the virtual bench's: its fringe value, blur and noise).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import xarray as xr
 
+from slipwave.defaults import BAND_MM
+from slipwave.photoelastic import Camera, Photoelastic
 from slipwave.setup import TestSetup
 from slipwave.solver.fronts import front_waves
 from slipwave.solver.quasi_dynamic import (
@@ -29,7 +37,10 @@ from slipwave.solver.quasi_dynamic import (
     slab_body,
 )
 from slipwave.solver.rate_state import RateState
-from slipwave.video.waves import MIN_EXTENT
+from slipwave.solver.slab import Slab
+from slipwave.video.frame import Frame
+from slipwave.video.kymograph import Geometry, kymograph
+from slipwave.video.waves import MIN_EXTENT, track_waves
 
 UM_PER_M = 1e6
 
@@ -80,10 +91,79 @@ def law_text(law: RateState) -> str:
             f"mu0 {law.mu0:g}, v0 {law.v0 * UM_PER_M:g} um/s")
 
 
-def simulate_waves(setup: TestSetup, law: RateState, *, elements: int,
-                   field_rate: float, sample_rate: float
-                   ) -> tuple[xr.Dataset, pd.DataFrame]:
-    """A test run quasi-dynamically: the run, and its waves in the video's columns.
+@dataclass(frozen=True)
+class WavesRun:
+    """A test run quasi-dynamically, filmed, and its waves measured two ways.
+
+    Attributes
+    ----------
+    run
+        The run (:func:`~slipwave.solver.quasi_dynamic.simulate_quasi_dynamic`'s dataset,
+        on the test's clock, its fields at the field rate, without the displacements).
+    fronts
+        Its slip-rate fronts (:func:`~slipwave.solver.fronts.front_waves`, at least the
+        video's smallest extent): each node's arrival where its slip rate passes the
+        front speed.
+    film
+        The kymograph of the run filmed as the bench's camera films
+        (:func:`film_kymograph`).
+    waves
+        The film's waves (:func:`slipwave.video.track_waves`): what the compare stage
+        sets beside the video's, measured as the video's are.
+    """
+
+    run: xr.Dataset
+    fronts: pd.DataFrame
+    film: xr.Dataset
+    waves: pd.DataFrame
+
+
+def film_kymograph(run: xr.Dataset, slab: Slab, *, band_mm: tuple[float, float],
+                   seed: int = 0) -> xr.Dataset:
+    """The kymograph of a run filmed by the virtual bench's camera at its field times.
+
+    Each field record's displacements are imaged as the bench's camera images a slab
+    (:class:`slipwave.photoelastic.Photoelastic` with the default
+    :class:`~slipwave.photoelastic.Camera`, its blur and sensor noise, only the pixels
+    the band needs) and read as the video's frames are
+    (:func:`slipwave.video.kymograph`), so that :func:`slipwave.video.track_waves` finds
+    the run's waves as it finds the video's.
+
+    Parameters
+    ----------
+    run
+        A quasi-dynamic run with ``ux``, ``uy`` over ``field_time`` (the frames' times).
+    slab
+        The slab it ran.
+    band_mm
+        The kymograph's band, mm above the interface (the video's).
+    seed
+        The camera noise's seed.
+
+    Returns
+    -------
+    xarray.Dataset
+        The kymograph, its time the run's ``field_time``.
+    """
+    camera = Camera()
+    photo = Photoelastic(slab, camera, below=band_mm[1] + 1.0)
+    geometry = Geometry(interface_row=photo.interface_row, left=photo.left_column,
+                        right=photo.left_column + photo.scale * slab.length,
+                        length=slab.length)
+    rng = np.random.default_rng([seed, 99])
+    displacements = np.concatenate([run["ux"].values, run["uy"].values], axis=1)
+    frames = (Frame(k, float(t), photo.render(photo.stress(u), rng))
+              for k, (t, u) in enumerate(zip(run["field_time"].values, displacements,
+                                             strict=True)))
+    film = kymograph(frames, geometry, band_mm)
+    film.attrs["source"] = "the quasi-dynamic run, filmed by the virtual bench's camera"
+    return film
+
+
+def simulate_waves(setup: TestSetup, law: RateState, *, elements: int, field_rate: float,
+                   sample_rate: float, frame_rate: float,
+                   band_mm: tuple[float, float] = BAND_MM) -> WavesRun:
+    """A test run quasi-dynamically, filmed at the video's frame rate: its waves.
 
     Parameters
     ----------
@@ -94,17 +174,18 @@ def simulate_waves(setup: TestSetup, law: RateState, *, elements: int,
     elements
         Elements along the contact.
     field_rate
-        Records of the nodes' slip rate, state and stresses per second.
+        Records of the nodes' slip rate, state and stresses per second, kept in the run.
     sample_rate
         Records of the loads and sensors per second.
+    frame_rate
+        The film's frames per second (the test's video's).
+    band_mm
+        The kymograph's band, mm above the interface (the video's).
 
     Returns
     -------
-    tuple
-        The run (:func:`~slipwave.solver.quasi_dynamic.simulate_quasi_dynamic`'s
-        dataset, its times shifted onto the test's clock) and its waves
-        (:func:`~slipwave.solver.fronts.front_waves`, at least the video's smallest
-        extent), on the test's clock.
+    WavesRun
+        The run, its slip-rate fronts, its film and the film's waves, on the test's clock.
 
     Examples
     --------
@@ -117,24 +198,33 @@ def simulate_waves(setup: TestSetup, law: RateState, *, elements: int,
     ...                   "frame")
     >>> law = rate_state_law({"a": 0.01, "b": 0.015, "dc_um": 2.0, "mu0": 0.9,
     ...                       "v0_um_s": 1.0})
-    >>> run, waves = simulate_waves(setup, law, elements=40, field_rate=10.0,
-    ...                             sample_rate=10.0)
-    >>> float(run["time"][0]), len(waves)  # the drive starts at 10 s; no wave by 20 s
-    (10.0, 0)
+    >>> result = simulate_waves(setup, law, elements=40, field_rate=10.0, sample_rate=10.0,
+    ...                         frame_rate=5.0)
+    >>> float(result.run["time"][0]), result.film.sizes["time"], len(result.waves)
+    (10.0, 51, 0)
     """
     loading = setup["loading_time_s"]
     driven = setup["duration_s"] - loading
+    kept = record_times(driven, field_rate)
+    filmed = record_times(driven, frame_rate)
+    slab = setup.slab(elements)
     run = simulate_quasi_dynamic(
-        slab_body(setup.slab(elements)), law,
+        slab_body(slab), law,
         Drive(normal_load=setup["normal_load_n"], drive_speed=setup["speed_mm_s"],
               normal_control="force"),
-        duration=driven, sample_rate=sample_rate,
-        field_times=record_times(driven, field_rate))
-    waves = front_waves(run, min_extent=MIN_EXTENT)
-    waves[["t_start", "t_end"]] += loading
+        duration=driven, sample_rate=sample_rate, field_times=np.union1d(kept, filmed))
+    film = film_kymograph(run.sel(field_time=filmed), slab, band_mm=band_mm)
+    fronts = front_waves(run, min_extent=MIN_EXTENT)
+    waves = track_waves(film)
+    for table in (fronts, waves):
+        table[["t_start", "t_end"]] += loading
+    film = film.assign_coords(time=film["time"] + loading)
+    run = run.sel(field_time=kept).drop_vars(["ux", "uy"])
     run = run.assign_coords(time=run["time"] + loading, field_time=run["field_time"] + loading)
     run["crossing_time"] = run["crossing_time"] + loading
-    for name in ("time", "field_time"):
-        run[name].attrs.update(units="s", long_name="time on the test's clock")
+    for dataset, names in ((run, ("time", "field_time")), (film, ("time",))):
+        for name in names:
+            dataset[name].attrs.update(units="s", long_name="time on the test's clock")
     run.attrs.update(loading_time=loading, law_text=law_text(law))
-    return run, waves
+    film.attrs.update(loading_time=loading, law_text=law_text(law), frame_rate=frame_rate)
+    return WavesRun(run, fronts, film, waves)

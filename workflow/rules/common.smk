@@ -46,6 +46,8 @@ def report_inputs(wildcards):
             inputs.update(
                 quasi_dynamic=f"results/{test}/simulated/quasi_dynamic.nc",
                 simulated_waves=f"results/{test}/simulated/waves.csv",
+                simulated_fronts=f"results/{test}/simulated/fronts.csv",
+                simulated_film=f"results/{test}/simulated/kymograph.nc",
             )
     return inputs
 
@@ -61,7 +63,8 @@ def video_options(wildcards, input):
     return " ".join(
         f"--{name.replace('_', '-')} {shlex.quote(str(input[name]))}"
         for name in (
-            "kymograph", "waves", "fused", "clock", "frames", "quasi_dynamic", "simulated_waves"
+            "kymograph", "waves", "fused", "clock", "frames", "quasi_dynamic", "simulated_waves",
+            "simulated_fronts", "simulated_film",
         )
         if name in input.keys()
     )

@@ -1,11 +1,15 @@
 rule simulate_waves:
-    """A filmed test simulated quasi-dynamically under rate-and-state friction: its waves
-    with a speed, in the video's columns, for the compare stage."""
+    """A filmed test simulated quasi-dynamically under rate-and-state friction and filmed at
+    its video's frame rate: its waves with a speed, measured as the video's, for the compare
+    stage; and the run's slip-rate fronts."""
     input:
         fit="results/{test_id}/fit.json",
+        kymograph="results/{test_id}/kymograph.nc",
     output:
         run="results/{test_id}/simulated/quasi_dynamic.nc",
+        film="results/{test_id}/simulated/kymograph.nc",
         waves="results/{test_id}/simulated/waves.csv",
+        fronts="results/{test_id}/simulated/fronts.csv",
     log:
         "results/logs/simulate_waves/{test_id}.log",
     params:
@@ -18,10 +22,11 @@ rule simulate_waves:
     threads: 1
     resources:
         mem_mb=scaled_memory(1500),
-        runtime=15,
+        runtime=20,
     conda:
         "../envs/slipwave.yaml"
     shell:
-        "slipwave simulate-waves --fit {input.fit:q} {params.law} "
-        "--elements {params.elements} --field-rate {params.field_rate} "
-        "-o {output.run:q} --waves {output.waves:q} > {log:q} 2>&1"
+        "slipwave simulate-waves --fit {input.fit:q} --kymograph {input.kymograph:q} "
+        "{params.law} --elements {params.elements} --field-rate {params.field_rate} "
+        "-o {output.run:q} --film {output.film:q} --waves {output.waves:q} "
+        "--fronts {output.fronts:q} > {log:q} 2>&1"

@@ -8,7 +8,8 @@
 """
 
 from slipwave.video.clock import ClockFit, align_clocks, on_card_clock, read_clock
-from slipwave.video.frames import Frame, FrameSource, open_frames
+from slipwave.video.frame import Frame
+from slipwave.video.frames import FrameSource, open_frames
 from slipwave.video.fuse import fuse
 from slipwave.video.kymograph import Geometry, find_geometry, kymograph
 from slipwave.video.waves import WAVE_COLUMNS, track_waves

@@ -20,20 +20,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from slipwave.errors import SlipwaveError
+from slipwave.video.frame import Frame
 
 if TYPE_CHECKING:
     import av
 
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff")
-
-
-@dataclass(frozen=True)
-class Frame:
-    """One frame: its position in the source, camera time (s) and grey image."""
-
-    index: int
-    time: float
-    image: np.ndarray
 
 
 @dataclass

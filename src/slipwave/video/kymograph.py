@@ -18,7 +18,7 @@ import xarray as xr
 
 from slipwave.defaults import BAND_MM
 from slipwave.errors import SlipwaveError
-from slipwave.video.frames import Frame
+from slipwave.video.frame import Frame
 
 LED_PATCH = (slice(2, 10), slice(2, 10))
 """Pixels of the sync LED (top left corner), as the virtual bench draws it."""
