@@ -10,7 +10,9 @@ do) at 80 and at 160 elements and films the run; compare_waves judges the film's
 against the video's, row by row. For scale, the truth's slip-rate fronts' median.
 
 Target: the wave speed's median agrees in at least 90 % of the tests at 80 elements (half
-the mesh that made them), the acceptance's "the wave speed compared agrees".
+the mesh that made them), the acceptance's "the wave speed compared agrees", counted over
+the tests whose video followed two waves or more (a law of the prior may slide steadily
+after a slip or two: such a test has no speed to compare, and is reported).
 
 Run: make bench  (or python benchmarks/bench_quasi_dynamic_tests.py)
 """
@@ -36,7 +38,7 @@ from slipwave.video import find_geometry, kymograph, open_frames, track_waves
 from targets import check, finish
 
 SEED = 3701  # the laws' draws; not tuned: the figures reported are this run's
-TESTS = 5
+TESTS = 6
 TRUTH_ELEMENTS = 160
 STAGE_ELEMENTS = (80, 160)
 DURATION = 150.0
@@ -105,11 +107,12 @@ def main() -> None:
                       f"{made:.0f} s, stage {staged:.0f} s)", flush=True)
     table = pd.DataFrame(rows)
     for elements in STAGE_ELEMENTS:
-        chosen = table[table["elements"] == elements]
-        share = float((chosen["speed"] == "agrees").mean())
-        print(f"stage at {elements} elements: wave speed's median agrees in "
-              f"{(chosen['speed'] == 'agrees').sum()} of {len(chosen)} tests; the share "
-              f"followed in {(chosen['followed'] == 'agrees').sum()}; film / video median "
+        chosen = table[(table["elements"] == elements) & (table["video_followed"] >= 2)]
+        share = float((chosen["speed"] == "agrees").mean()) if len(chosen) else 0.0
+        print(f"stage at {elements} elements: of {len(chosen)} tests whose video followed two "
+              f"waves or more (of {TESTS}), the wave speed's median agrees in "
+              f"{(chosen['speed'] == 'agrees').sum()}; the share followed in "
+              f"{(chosen['followed'] == 'agrees').sum()}; film / video median "
               f"{(chosen['film_median'] / chosen['video_median']).round(2).tolist()}")
         if elements == STAGE_ELEMENTS[0]:
             status = check("quasi-dynamic tests whose wave speed agrees", share, TARGET,
