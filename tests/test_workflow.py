@@ -15,6 +15,7 @@ import pytest
 
 from slipwave.bench.sawtooth import SawtoothBench, sawtooth_recording
 from slipwave.campaign import read_campaign
+from slipwave.compare import FOLLOWED, WHOLE_CONTACT
 from slipwave.io import read_dataset
 
 ROOT = Path(__file__).parents[1]
@@ -108,7 +109,11 @@ def test_full_run_on_default_campaign(workdir):
         # every filmed test's waves against its quasi-dynamic run's film's, rows judged
         waves_rows = comparison[comparison["feature"].str.endswith("(video vs quasi-dynamic)")]
         assert len(waves_rows) == 6
-        assert waves_rows["verdict"].isin(["agrees", "differs"]).sum() >= 4
+        verdicts = waves_rows.set_index("feature")["verdict"]
+        assert verdicts[[WHOLE_CONTACT.name, FOLLOWED.name]].isin(["agrees", "differs"]).all()
+        # the config's law slips in fronts of metres per second: its film shows slips the
+        # tracker cannot follow, where the video (waves at 200 mm/s) follows most
+        assert verdicts[FOLLOWED.name] == "differs"
         assert "The waves simulated quasi-dynamically" in page
         assert "filmed by the virtual bench's" in page
         # the page says the run's mesh, and that this test's convergence is not checked
