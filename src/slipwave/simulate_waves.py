@@ -91,6 +91,41 @@ def law_text(law: RateState) -> str:
             f"mu0 {law.mu0:g}, v0 {law.v0 * UM_PER_M:g} um/s")
 
 
+def on_test_clock(run: xr.Dataset, loading: float) -> xr.Dataset:
+    """A quasi-dynamic run's times moved onto its test's clock.
+
+    The run's clock starts with the drive; the test's, with the normal loading, which
+    takes ``loading`` seconds.
+
+    Parameters
+    ----------
+    run
+        From :func:`~slipwave.solver.quasi_dynamic.simulate_quasi_dynamic`.
+    loading
+        The test's loading time, s.
+
+    Returns
+    -------
+    xarray.Dataset
+        The run, its ``time``, ``field_time`` and ``crossing_time`` shifted, and its
+        ``loading_time`` attribute set.
+
+    Examples
+    --------
+    >>> run = xr.Dataset(coords={"time": [0.0, 1.0], "field_time": [0.0]})
+    >>> run["crossing_time"] = ("crossing", [0.5])
+    >>> moved = on_test_clock(run, 10.0)
+    >>> moved["time"].values.tolist(), float(moved["crossing_time"][0])
+    ([10.0, 11.0], 10.5)
+    """
+    run = run.assign_coords(time=run["time"] + loading, field_time=run["field_time"] + loading)
+    run["crossing_time"] = run["crossing_time"] + loading
+    for name in ("time", "field_time"):
+        run[name].attrs.update(units="s", long_name="time on the test's clock")
+    run.attrs["loading_time"] = loading
+    return run
+
+
 @dataclass(frozen=True)
 class WavesRun:
     """A test run quasi-dynamically, filmed, and its waves measured two ways.
@@ -219,12 +254,8 @@ def simulate_waves(setup: TestSetup, law: RateState, *, elements: int, field_rat
     for table in (fronts, waves):
         table[["t_start", "t_end"]] += loading
     film = film.assign_coords(time=film["time"] + loading)
-    run = run.sel(field_time=kept).drop_vars(["ux", "uy"])
-    run = run.assign_coords(time=run["time"] + loading, field_time=run["field_time"] + loading)
-    run["crossing_time"] = run["crossing_time"] + loading
-    for dataset, names in ((run, ("time", "field_time")), (film, ("time",))):
-        for name in names:
-            dataset[name].attrs.update(units="s", long_name="time on the test's clock")
-    run.attrs.update(loading_time=loading, law_text=law_text(law))
+    film["time"].attrs.update(units="s", long_name="time on the test's clock")
+    run = on_test_clock(run.sel(field_time=kept).drop_vars(["ux", "uy"]), loading)
+    run.attrs["law_text"] = law_text(law)
     film.attrs.update(loading_time=loading, law_text=law_text(law), frame_rate=frame_rate)
     return WavesRun(run, fronts, film, waves)

@@ -259,6 +259,39 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
     clean = clean_signals(simulation, speed=spec.speed, loading_time=spec.loading_time,
                           duration=spec.duration, sample_rate=spec.sample_rate,
                           wave_speed=spec.wave_speed)
+    recording = card_recording(spec, clean, seed=seed, sensors=sensors,
+                               generator="slipwave virtual bench")
+    events = _events(spec, simulation)
+    phases = sample_phases(spec, events, clean["time"].values)
+    frame_times = camera_frame_times(spec)
+    if not events.empty:
+        events = _camera_truth(spec, simulation, events, frame_times)
+    return BenchResult(spec, simulation, recording, events, phases, frame_times, seed)
+
+
+def card_recording(spec: BenchTest, clean: xr.Dataset, *, seed: int,
+                   sensors: Mapping[str, Sensor] | None, generator: str) -> xr.Dataset:
+    """What the card records of a test's noise-free channels, with the test's attributes.
+
+    Parameters
+    ----------
+    spec
+        The test (its edge convention, geometry, loads and camera).
+    clean
+        The noise-free channels over ``time`` (:func:`slipwave.solver.signals.clean_signals`).
+    seed
+        The card's noise seed.
+    sensors
+        The card's sensors by channel; ``None``: :data:`~slipwave.bench.sensors.DEFAULT_SENSORS`.
+    generator
+        What made the test, for the ``generator`` attribute.
+
+    Returns
+    -------
+    xarray.Dataset
+        The recording, as :func:`slipwave.io.read_acquisition` reads one.
+
+    """
     if spec.edge_convention == "outward":  # the left sensor reads its edge's outward motion
         clean["DG"] = clean["DG"].copy(data=-clean["DG"].values)
     recording = apply_sensors(clean, dict(sensors or DEFAULT_SENSORS), seed=seed)
@@ -272,17 +305,30 @@ def simulate_test(spec: BenchTest, *, seed: int = 0, memory_limit_gb: float | No
         "normal_load_n": spec.normal_load,
         "sync_time_s": spec.sync_time,
         "camera_fps": spec.camera.fps,
-        "generator": "slipwave virtual bench",
+        "generator": generator,
         "Conventions": CONVENTIONS,
     }
-    events = _events(spec, simulation)
-    phases = sample_phases(spec, events, clean["time"].values)
-    camera_end = (spec.duration - spec.camera.clock_offset) / (1 + spec.camera.clock_rate_error)
-    frame_times = np.arange(0.0, camera_end, 1.0 / spec.camera.fps)
-    frame_times = frame_times[spec.camera.acquisition_time(frame_times) >= 0.0]
-    if not events.empty:
-        events = _camera_truth(spec, simulation, events, frame_times)
-    return BenchResult(spec, simulation, recording, events, phases, frame_times, seed)
+    return recording
+
+
+def camera_frame_times(spec: BenchTest) -> np.ndarray:
+    """The camera's timestamps of the frames it takes during the test.
+
+    Parameters
+    ----------
+    spec
+        The test (its duration and camera).
+
+    Returns
+    -------
+    numpy.ndarray
+        Camera times, s, of the frames taken between the card's start and the test's end.
+
+    """
+    camera = spec.camera
+    camera_end = (spec.duration - camera.clock_offset) / (1 + camera.clock_rate_error)
+    frame_times = np.arange(0.0, camera_end, 1.0 / camera.fps)
+    return frame_times[camera.acquisition_time(frame_times) >= 0.0]
 
 
 def _direction(first: float, last: float) -> str:

@@ -27,15 +27,17 @@ from slipwave.bench.generate import (
     LED_DURATION,
     BenchResult,
     BenchTest,
+    camera_frame_times,
     camera_truth,
+    card_recording,
     sample_phases,
 )
-from slipwave.bench.sensors import DEFAULT_SENSORS, Sensor, apply_sensors
+from slipwave.bench.sensors import Sensor
 from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
 from slipwave.photoelastic import Photoelastic
 from slipwave.resources import require_memory
-from slipwave.simulate_waves import rate_state_law
+from slipwave.simulate_waves import on_test_clock, rate_state_law
 from slipwave.solver.fronts import front_waves
 from slipwave.solver.quasi_dynamic import Drive, simulate_quasi_dynamic, slab_body
 from slipwave.solver.signals import CARD_SIGN, CHANNEL_ATTRS, CHANNELS
@@ -111,9 +113,7 @@ def simulate_quasi_dynamic_test(spec: BenchTest, *, seed: int = 0,
     if driven <= 0:
         raise SlipwaveError(f"bench test {spec.test_id!r}: its duration ({spec.duration} s) "
                             f"ends before its loading time ({loading} s)")
-    camera_end = (spec.duration - spec.camera.clock_offset) / (1 + spec.camera.clock_rate_error)
-    frame_times = np.arange(0.0, camera_end, 1.0 / spec.camera.fps)
-    frame_times = frame_times[spec.camera.acquisition_time(frame_times) >= 0.0]
+    frame_times = camera_frame_times(spec)
     filmed = spec.camera.acquisition_time(frame_times) - loading
     field_times = np.unique(np.concatenate(
         [[0.0], filmed[(filmed >= 0.0) & (filmed <= driven)] if spec.video != "none" else []]))
@@ -126,29 +126,11 @@ def simulate_quasi_dynamic_test(spec: BenchTest, *, seed: int = 0,
         slab_body(spec.slab()), rate_state_law(spec.rate_state),
         Drive(normal_load=spec.normal_load, drive_speed=spec.speed, normal_control="force"),
         duration=driven, sample_rate=spec.sample_rate, field_times=field_times)
-    run = run.assign_coords(time=run["time"] + loading, field_time=run["field_time"] + loading)
-    run["crossing_time"] = run["crossing_time"] + loading
-    for name in ("time", "field_time"):
-        run[name].attrs.update(units="s", long_name="time on the test's clock")
-    run.attrs["loading_time"] = loading
+    run = on_test_clock(run, loading)
     clean = _card_signals(run, loading=loading, duration=spec.duration,
                           sample_rate=spec.sample_rate)
-    if spec.edge_convention == "outward":  # the left sensor reads its edge's outward motion
-        clean["DG"] = clean["DG"].copy(data=-clean["DG"].values)
-    recording = apply_sensors(clean, dict(sensors or DEFAULT_SENSORS), seed=seed)
-    recording.attrs = {
-        "test_id": spec.test_id,
-        "sample_rate_hz": spec.sample_rate,
-        "length_mm": spec.length,
-        "height_mm": spec.height,
-        "width_mm": spec.width,
-        "speed_mm_s": spec.speed,
-        "normal_load_n": spec.normal_load,
-        "sync_time_s": spec.sync_time,
-        "camera_fps": spec.camera.fps,
-        "generator": "slipwave virtual bench, quasi-dynamic",
-        "Conventions": CONVENTIONS,
-    }
+    recording = card_recording(spec, clean, seed=seed, sensors=sensors,
+                               generator="slipwave virtual bench, quasi-dynamic")
     events = _events(spec, run)
     phases = sample_phases(spec, events, clean["time"].values)
     if not events.empty:
