@@ -32,6 +32,7 @@ from slipwave.setup import TestSetup
 from slipwave.solver.fronts import front_waves
 from slipwave.solver.quasi_dynamic import (
     Drive,
+    contact_displacements,
     record_times,
     simulate_quasi_dynamic,
     slab_body,
@@ -186,7 +187,7 @@ def film_kymograph(run: xr.Dataset, slab: Slab, *, band_mm: tuple[float, float],
                         right=photo.left_column + photo.scale * slab.length,
                         length=slab.length)
     rng = np.random.default_rng([seed, 99])
-    displacements = np.concatenate([run["ux"].values, run["uy"].values], axis=1)
+    displacements = contact_displacements(run)
     frames = (Frame(k, float(t), photo.render(photo.stress(u), rng))
               for k, (t, u) in enumerate(zip(run["field_time"].values, displacements,
                                              strict=True)))

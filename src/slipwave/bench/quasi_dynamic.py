@@ -39,7 +39,12 @@ from slipwave.photoelastic import Photoelastic
 from slipwave.resources import require_memory
 from slipwave.simulate_waves import on_test_clock, rate_state_law
 from slipwave.solver.fronts import front_waves
-from slipwave.solver.quasi_dynamic import Drive, simulate_quasi_dynamic, slab_body
+from slipwave.solver.quasi_dynamic import (
+    Drive,
+    contact_displacements,
+    simulate_quasi_dynamic,
+    slab_body,
+)
 from slipwave.solver.signals import CARD_SIGN, CHANNEL_ATTRS, CHANNELS
 
 RUN_FIELDS = 7
@@ -55,7 +60,7 @@ class QuasiDynamicResult(BenchResult):
         camera = Photoelastic(spec.slab(), spec.camera)
         rng = np.random.default_rng([self.seed, 99])
         field_time = run["field_time"].values
-        displacements = np.concatenate([run["ux"].values, run["uy"].values], axis=1)
+        displacements = contact_displacements(run)
         for t in spec.camera.acquisition_time(self.frame_times):
             if t < spec.loading_time:
                 u = t / spec.loading_time * displacements[0]
@@ -162,10 +167,7 @@ def _events(spec: BenchTest, run: xr.Dataset) -> pd.DataFrame:
     waves = front_waves(run)
     if waves.empty:
         return pd.DataFrame()
-    time = run["time"].values
-    # the card's samples either side: the last before the wave, the first after it
-    before = np.clip(np.searchsorted(time, waves["t_start"], side="right") - 1, 0, time.size - 1)
-    after = np.clip(np.searchsorted(time, waves["t_end"], side="left"), 0, time.size - 1)
+    before, after = _either_side(run["time"].values, waves)  # the card's samples
     T, N = run["T"].values, run["N"].values
     DG, DD = run["DG"].values, run["DD"].values
     events = pd.DataFrame({
@@ -197,9 +199,14 @@ def _events(spec: BenchTest, run: xr.Dataset) -> pd.DataFrame:
 def _displacements_around(run: xr.Dataset, events: pd.DataFrame
                           ) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Each wave's contact displacements at the frames either side of it."""
-    field_time = run["field_time"].values
-    displacements = np.concatenate([run["ux"].values, run["uy"].values], axis=1)
-    last = field_time.size - 1
-    before = np.clip(np.searchsorted(field_time, events["t_start"], side="right") - 1, 0, last)
-    after = np.clip(np.searchsorted(field_time, events["t_end"], side="left"), 0, last)
+    displacements = contact_displacements(run)
+    before, after = _either_side(run["field_time"].values, events)
     return [displacements[k] for k in before], [displacements[k] for k in after]
+
+
+def _either_side(times: np.ndarray, waves: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """Each wave's last record before it starts and first after it ends (indices)."""
+    last = times.size - 1
+    before = np.clip(np.searchsorted(times, waves["t_start"], side="right") - 1, 0, last)
+    after = np.clip(np.searchsorted(times, waves["t_end"], side="left"), 0, last)
+    return before, after

@@ -509,6 +509,23 @@ def simulate_quasi_dynamic(
     return _to_dataset(body, law, drive, record, counts, front_speed)
 
 
+def contact_displacements(run: xr.Dataset) -> np.ndarray:
+    """Each field record's contact displacements ``[ux, uy]``, as the slab's images take them.
+
+    Parameters
+    ----------
+    run
+        From :func:`simulate_quasi_dynamic`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (field records, 2 nodes), mm (:meth:`slipwave.photoelastic.Photoelastic.stress`'s
+        ``u`` row by row).
+    """
+    return np.concatenate([run["ux"].values, run["uy"].values], axis=1)
+
+
 def record_times(duration: float, rate: float) -> np.ndarray:
     """Times from 0 to the duration at a rate, both ends included where they fall on it.
 
