@@ -66,6 +66,26 @@ def test_shear_breaks_the_symmetry(simulation, camera):
     assert np.abs(slab - slab[:, ::-1]).mean() > 20.0
 
 
+def test_a_band_film_is_the_whole_frame_in_the_band_and_bare_elsewhere(simulation):
+    # the film of a band (Photoelastic(below=), the band's top plus 1 mm, more than the
+    # blur's reach): the band's pixels are the whole frame's; the rows beyond the
+    # blur's reach of the slab imaged are the bare background
+    blurred = Camera(noise=0.0)
+    whole, band = Photoelastic(SLAB, blurred), Photoelastic(SLAB, blurred, below=4.0)
+    u = contact(simulation, simulation.sizes["step"] - 1)
+    rng = np.random.default_rng(0)
+    full, part = whole.render(whole.stress(u), rng), band.render(band.stress(u), rng)
+    top = band.interface_row - int(3.0 * band.scale)  # the band's top, 3 mm
+    assert band.rows.start < top and band.rows.stop > band.interface_row
+    assert np.array_equal(part[top : band.interface_row + 1], full[top : band.interface_row + 1])
+    assert np.all(part[: band.rows.start] == blurred.background)
+    assert np.all(part[band.rows.stop :] == blurred.background)
+    # the camera's noise is drawn in the rendered rows alone
+    noisy = Photoelastic(SLAB, Camera(), below=4.0).render(band.stress(u), rng)
+    assert np.all(noisy[: band.rows.start] == blurred.background)
+    assert np.abs(noisy.astype(float) - part).max() > 0
+
+
 @pytest.mark.parametrize("bits", [8, 16])
 def test_ffv1_is_lossless_and_keeps_timestamps(tmp_path, bits):
     frames = random_frames(1, bits, (160, 320), 4)

@@ -317,7 +317,8 @@ def _compile(args: argparse.Namespace) -> None:
     report = compile_kernels(args.processes)
     with atomic_output(args.output) as temporary:
         temporary.write_text(json.dumps(report, indent=2) + "\n")
-    for name, part in (("solver", report), ("detection", report["detection"])):
+    for name, part in (("solver", report), ("detection", report["detection"]),
+                       ("quasi-dynamic contact", report["quasi_dynamic"])):
         kernels = part["kernels"].values()
         print(f"{name}: {len(kernels)} kernels, "
               f"{sum(kernel['compiled'] for kernel in kernels)} compiled now and "

@@ -1,4 +1,4 @@
-"""The compile stage: the solver's and the detection's kernels, built once per machine.
+"""The compile stage: the solvers' and the detection's kernels, built once per machine.
 
 numba compiles a kernel on its first call and caches it on disk; the workflow's first
 rule builds them all (:func:`compile_kernels`) so that the jobs after it load them.
@@ -15,7 +15,12 @@ from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from slipwave.events.compiled import compile_detection
-from slipwave.solver.compiled import CALLEE_GROUPS, compile_callees, compile_solver
+from slipwave.solver.compiled import (
+    CALLEE_GROUPS,
+    compile_callees,
+    compile_quasi_dynamic,
+    compile_solver,
+)
 
 
 def compile_kernels(processes: int = 1) -> dict[str, Any]:
@@ -32,13 +37,15 @@ def compile_kernels(processes: int = 1) -> dict[str, Any]:
     dict
         :func:`~slipwave.solver.compiled.compile_solver`'s report, its ``seconds`` the
         whole stage's wall time, with ``detection``
-        (:func:`~slipwave.events.compiled.compile_detection`'s) and ``processes``.
+        (:func:`~slipwave.events.compiled.compile_detection`'s), ``quasi_dynamic``
+        (:func:`~slipwave.solver.compiled.compile_quasi_dynamic`'s) and ``processes``.
 
     """
     start = time.perf_counter()
     if processes < 2:
         report = compile_solver()
         report["detection"] = compile_detection()
+        report["quasi_dynamic"] = compile_quasi_dynamic()
     else:
         # fork where there is one: a worker then needs no imports of its own
         methods = multiprocessing.get_all_start_methods()
@@ -46,9 +53,11 @@ def compile_kernels(processes: int = 1) -> dict[str, Any]:
         with ProcessPoolExecutor(max_workers=2, mp_context=context) as pool:
             callees = [pool.submit(compile_callees, group) for group in CALLEE_GROUPS]
             detection = pool.submit(compile_detection)  # in the first worker free
+            quasi_dynamic = pool.submit(compile_quasi_dynamic)
             shares = [share.result() for share in callees]
             report = compile_solver()
             report["detection"] = detection.result()
+            report["quasi_dynamic"] = quasi_dynamic.result()
         for share in shares:
             _count_share(report["kernels"], share)
     report["seconds"] = round(time.perf_counter() - start, 3)

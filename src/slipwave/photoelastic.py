@@ -92,9 +92,10 @@ class Photoelastic:
     camera
         The camera.
     below
-        Image only the slab's pixels within this height of the interface, mm (the rest
-        shows the background): a film of the band a kymograph reads, computed from the
-        mesh's rows there alone. ``None``: the whole slab.
+        Image only the slab's pixels within this height of the interface, mm, and the
+        flat's just under it: a film of the band a kymograph reads, computed from the
+        mesh's rows there alone, blurred and noised in those rows alone (the rest of the
+        frame is the bare background). ``None``: the whole slab.
     """
 
     def __init__(self, slab: Slab, camera: Camera, *, below: float | None = None) -> None:
@@ -130,6 +131,13 @@ class Photoelastic:
         self.inside = (np.abs(X) < slab.length / 2) & (Y > 0) & (slab.height > Y)
         if below is not None:
             self.inside &= below >= Y
+        # the rows rendered: with a band, those within the blur's reach of its pixels (the
+        # Gaussian filter's radius and one more), whose values are then the whole frame's
+        reach = int(4.0 * camera.blur + 0.5) + 1
+        imaged = np.flatnonzero(self.inside.any(axis=1))
+        self.rows = (slice(0, camera.height) if below is None or imaged.size == 0 else
+                     slice(max(int(imaged[0]) - reach, 0),
+                           min(self.interface_row + reach, camera.height)))
         px, py = X[self.inside], Y[self.inside]
         ex = np.clip(np.searchsorted(self.grid_x, px) - 1, 0, self.grid_x.size - 2)
         ey = np.clip(np.searchsorted(self.grid_y, py) - 1, 0, self.grid_y.size - 2)
@@ -159,35 +167,52 @@ class Photoelastic:
             (3, pixels) stresses, MPa.
 
         """
-        UX = (self._ux @ u).reshape(self._shape)
-        UY = (self._uy @ u).reshape(self._shape)
-        hx = np.diff(self.grid_x)[None, :]
-        hy = np.diff(self.grid_y)[:, None]
+        return self.stresses(np.asarray(u)[None, :])[0]
+
+    def stresses(self, displacements: np.ndarray) -> np.ndarray:
+        """:meth:`stress` of many frames at once (a film's: one product, no loop).
+
+        Parameters
+        ----------
+        displacements
+            (frames, contact nodes x 2): each frame's ``[ux, uy]``, mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            (frames, 3, pixels) stresses, MPa.
+
+        """
+        frames = displacements.shape[0]
+        UX = (displacements @ self._ux.T).reshape(frames, *self._shape)
+        UY = (displacements @ self._uy.T).reshape(frames, *self._shape)
+        hx = np.diff(self.grid_x)[None, None, :]
+        hy = np.diff(self.grid_y)[None, :, None]
 
         def gradient(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            d_dx = (F[:-1, 1:] - F[:-1, :-1] + F[1:, 1:] - F[1:, :-1]) / (2 * hx)
-            d_dy = (F[1:, :-1] - F[:-1, :-1] + F[1:, 1:] - F[:-1, 1:]) / (2 * hy)
+            d_dx = (F[:, :-1, 1:] - F[:, :-1, :-1] + F[:, 1:, 1:] - F[:, 1:, :-1]) / (2 * hx)
+            d_dy = (F[:, 1:, :-1] - F[:, :-1, :-1] + F[:, 1:, 1:] - F[:, :-1, 1:]) / (2 * hy)
             return d_dx, d_dy
 
         dux_dx, dux_dy = gradient(UX)
         duy_dx, duy_dy = gradient(UY)
         trace = self._lam * (dux_dx + duy_dy)
         centres = np.stack([trace + 2 * self._mu * dux_dx, trace + 2 * self._mu * duy_dy,
-                            self._mu * (dux_dy + duy_dx)])
+                            self._mu * (dux_dy + duy_dx)], axis=1)
         # Average the (up to four) elements around each node.
-        total = np.zeros((3, *self._shape))
+        total = np.zeros((frames, 3, *self._shape))
         count = np.zeros(self._shape)
         for dy in (0, 1):
             for dx in (0, 1):
-                rows = slice(dy, dy + centres.shape[1])
-                columns = slice(dx, dx + centres.shape[2])
-                total[:, rows, columns] += centres
+                rows = slice(dy, dy + centres.shape[2])
+                columns = slice(dx, dx + centres.shape[3])
+                total[:, :, rows, columns] += centres
                 count[rows, columns] += 1
-        nodal = (total / count).reshape(3, -1)
+        nodal = (total / count).reshape(frames, 3, -1)
         c00, c10, c01, c11 = self._corners
         xi, eta = self._xi, self._eta
-        return ((1 - xi) * (1 - eta) * nodal[:, c00] + xi * (1 - eta) * nodal[:, c10]
-                + (1 - xi) * eta * nodal[:, c01] + xi * eta * nodal[:, c11])
+        return ((1 - xi) * (1 - eta) * nodal[:, :, c00] + xi * (1 - eta) * nodal[:, :, c10]
+                + (1 - xi) * eta * nodal[:, :, c01] + xi * eta * nodal[:, :, c11])
 
     def fringe_order(self, stress: np.ndarray) -> np.ndarray:
         """N_f = (s1 - s2) w / f_sigma at the slab's pixels.
@@ -233,10 +258,13 @@ class Photoelastic:
         image[self.inside] = camera.background + camera.intensity * np.sin(np.pi * orders) ** 2
         if led:
             image[3:9, 3:9] = 255.0
+        if self.rows != slice(0, camera.height):  # a band's film: the rest stays bare
+            image[self.rows.stop :, :] = camera.background
+        imaged = image[self.rows]
         if camera.blur:
-            image = ndimage.gaussian_filter(image, camera.blur)
+            imaged[:] = ndimage.gaussian_filter(imaged, camera.blur)
         if camera.noise:
-            image = image + rng.normal(0.0, camera.noise, image.shape)
+            imaged += rng.normal(0.0, camera.noise, imaged.shape)
         if camera.bits == 16:
             return np.clip(np.round(image * 257.0), 0, 65535).astype(np.uint16)
         return np.clip(np.round(image), 0, 255).astype(np.uint8)

@@ -33,7 +33,6 @@ from slipwave.bench.generate import (
     sample_phases,
 )
 from slipwave.bench.sensors import Sensor
-from slipwave.defaults import CONVENTIONS
 from slipwave.errors import SlipwaveError
 from slipwave.photoelastic import Photoelastic
 from slipwave.resources import require_memory
@@ -45,7 +44,7 @@ from slipwave.solver.quasi_dynamic import (
     simulate_quasi_dynamic,
     slab_body,
 )
-from slipwave.solver.signals import CARD_SIGN, CHANNEL_ATTRS, CHANNELS
+from slipwave.solver.signals import quasi_dynamic_signals
 
 RUN_FIELDS = 7
 """The fields the run records at every frame (slip rate, state, p, q, contact, ux, uy)."""
@@ -132,8 +131,8 @@ def simulate_quasi_dynamic_test(spec: BenchTest, *, seed: int = 0,
         Drive(normal_load=spec.normal_load, drive_speed=spec.speed, normal_control="force"),
         duration=driven, sample_rate=spec.sample_rate, field_times=field_times)
     run = on_test_clock(run, loading)
-    clean = _card_signals(run, loading=loading, duration=spec.duration,
-                          sample_rate=spec.sample_rate)
+    clean = quasi_dynamic_signals(run, loading=loading, duration=spec.duration,
+                                  sample_rate=spec.sample_rate)
     recording = card_recording(spec, clean, seed=seed, sensors=sensors,
                                generator="slipwave virtual bench, quasi-dynamic")
     events = _events(spec, run)
@@ -142,24 +141,6 @@ def simulate_quasi_dynamic_test(spec: BenchTest, *, seed: int = 0,
         before, after = _displacements_around(run, events)
         events = camera_truth(spec, events, before, after, frame_times)
     return QuasiDynamicResult(spec, run, recording, events, phases, frame_times, seed)
-
-
-def _card_signals(run: xr.Dataset, *, loading: float, duration: float, sample_rate: float
-                  ) -> xr.Dataset:
-    """The card's noise-free channels over the test: the pressing, then the run."""
-    time = np.arange(round(duration * sample_rate)) / sample_rate
-    run_time = run["time"].values
-    pressing = np.clip(time / loading, 0.0, 1.0)
-    signals = {}
-    for name in CHANNELS:
-        values = run[name].values
-        signal = np.where(time < loading, pressing * values[0],
-                          np.interp(time, run_time, values))
-        signals[name] = CARD_SIGN[name] * signal
-    return xr.Dataset(
-        {name: ("time", values, dict(CHANNEL_ATTRS[name])) for name, values in signals.items()},
-        coords={"time": ("time", time, dict(CHANNEL_ATTRS["time"]))},
-        attrs={"Conventions": CONVENTIONS})
 
 
 def _events(spec: BenchTest, run: xr.Dataset) -> pd.DataFrame:

@@ -393,6 +393,114 @@ def sample_posterior(process: Surrogate, box: np.ndarray,
     return chain[rng.choice(chain.shape[0], size=min(samples, chain.shape[0]), replace=False)]
 
 
+
+ACQUISITION_BATCH = 2
+"""Guesses added per refit of the surrogate in :func:`upper_bound_search` (the highest
+upper bounds): the same whatever the number of processes, so that a fit does not depend
+on the cores it ran on."""
+
+CANDIDATES = 4000
+"""Prior draws among which :func:`upper_bound_search` picks each batch's guesses."""
+
+BEST_STARTS = 4
+"""The best guesses the posterior's walkers start around (:func:`upper_bound_search`)."""
+
+
+def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.ndarray,
+                       draw: Callable[[int, np.random.Generator | int], np.ndarray],
+                       inside: Callable[[np.ndarray], np.ndarray], *, design: int,
+                       acquisitions: int, exploration: float, samples: int, seed: int,
+                       start: np.ndarray | None = None,
+                       progress: Callable[[str], None] | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A posterior from a surrogate of a likelihood, its guesses chosen by upper bound.
+
+    A Latin hypercube of the prior (``design`` points per coordinate), then batches of
+    :data:`ACQUISITION_BATCH` guesses where the surrogate's upper confidence bound is
+    highest among :data:`CANDIDATES` prior draws (``acquisitions`` per coordinate), then
+    emcee on prior x exp(surrogate mean) (:func:`sample_posterior`): BOLFI's scheme
+    without its zooming stages, for a likelihood cheap enough to search the prior whole.
+
+    Parameters
+    ----------
+    evaluate
+        The log-likelihoods at guesses, shape (n,) for (n, coordinates); -inf or NaN
+        where the simulation failed.
+    box
+        The prior's box, one row (low, high) per coordinate.
+    draw
+        ``draw(count, rng)``: ``count`` points of the prior (a Latin hypercube of the box
+        restricted to the prior), ``rng`` a seed or a generator.
+    inside
+        Whether points lie in the prior.
+    design, acquisitions
+        Guesses of the design and of the acquisitions, per coordinate.
+    exploration
+        The upper bound's multiple of the surrogate's standard deviation.
+    samples
+        Posterior samples kept.
+    seed
+        The search's seed.
+    start
+        Guesses evaluated with the design (those outside the prior are left out).
+    progress
+        Called with a line after each round of guesses.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The posterior samples, the guesses and their log-likelihoods.
+
+    Raises
+    ------
+    SlipwaveError
+        If fewer than two guesses have a finite likelihood.
+
+    Examples
+    --------
+    A Gaussian likelihood of mean 0.3 and standard deviation 0.05 over [0, 1]:
+
+    >>> box = np.array([[0.0, 1.0]])
+    >>> def draw(count, rng):
+    ...     return qmc.LatinHypercube(d=1, seed=rng).random(count)
+    >>> def inside(x):
+    ...     return np.all((x >= 0.0) & (x <= 1.0), axis=1)
+    >>> samples, points, _ = upper_bound_search(
+    ...     lambda x: -0.5 * ((x[:, 0] - 0.3) / 0.05) ** 2, box, draw, inside, design=8,
+    ...     acquisitions=6, exploration=2.0, samples=2000, seed=1)
+    >>> round(float(samples.mean()), 2), round(float(samples.std()), 2)
+    (0.3, 0.05)
+    """
+    say = progress or (lambda _: None)
+    rng = np.random.default_rng(seed)
+    dimensions = box.shape[0]
+    points = draw(design * dimensions, seed)
+    if start is not None:
+        start = np.atleast_2d(np.asarray(start, dtype=float))
+        points = np.vstack([start[inside(start)], points])
+    logliks = np.asarray(evaluate(points), dtype=float)
+    say(f"design: {len(points)} guesses, best log-likelihood {np.nanmax(logliks):.1f}")
+
+    def fitted(refit: int) -> Surrogate:
+        finite = np.isfinite(logliks)
+        if finite.sum() < 2:
+            raise SlipwaveError(f"{finite.sum()} of {len(points)} guesses have a likelihood "
+                                "(the simulations failed): nothing to search")
+        return surrogate(points[finite], logliks[finite], box, seed + refit)
+
+    for round_ in range(0, acquisitions * dimensions, ACQUISITION_BATCH):
+        candidates = draw(CANDIDATES, rng)
+        upper = fitted(round_).upper(candidates, exploration)
+        chosen = candidates[np.argsort(upper)[-ACQUISITION_BATCH:]]
+        points = np.vstack([points, chosen])
+        logliks = np.append(logliks, np.asarray(evaluate(chosen), dtype=float))
+        say(f"acquisitions: {len(points)} guesses, best log-likelihood "
+            f"{np.nanmax(logliks):.1f}")
+    finite = np.isfinite(logliks)
+    best = points[finite][np.argsort(logliks[finite])[-BEST_STARTS:]]
+    drawn = sample_posterior(fitted(0), box, inside, best, samples=samples, seed=seed)
+    return drawn, points, logliks
+
 def log_evidence(process: Surrogate, box: np.ndarray, law: str,
                  inside: Callable[[np.ndarray], np.ndarray], samples: np.ndarray, seed: int, *,
                  draws: int = 4000) -> float:

@@ -39,7 +39,7 @@ from slipwave.events.stick_slip import (
     slider_window_features,
 )
 from slipwave.fit.likelihood import shrunk_covariance
-from slipwave.fit.search import sample_posterior, surrogate
+from slipwave.fit.search import upper_bound_search
 from slipwave.solver.rate_state import RateState, steady_friction
 from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
 
@@ -83,10 +83,6 @@ FEATURE_FLOOR = np.array([REFERENCE_SCATTER, 0.002, 0.02, 0.01, 0.02])
 recurrence's in its logarithm): the level's is the records' scatter
 (:data:`REFERENCE_SCATTER`), the others' what a feature that does not vary over the
 windows still carries of the model's own roughness."""
-
-ACQUISITION_BATCH = 2
-"""Guesses added per refit of the surrogate (the highest upper bounds): the same whatever
-the number of processes, so that a fit does not depend on the cores it ran on."""
 
 SPIN_UP_WINDOWS = 1
 """Windows simulated and dropped before the members: the start's transient."""
@@ -578,34 +574,15 @@ def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
         The posterior samples and the guesses.
     """
     box = prior_box(settings.states, settings.cutoff)
-    dimensions = box.shape[0]
-    say = progress or (lambda _: None)
-    rng = np.random.default_rng(settings.seed)
     # one pool for the whole search: its workers import slipwave once
     with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
           else contextlib.nullcontext()) as pool:
-        points = _prior_draws(settings.design * dimensions, settings.seed, settings.states,
-                              settings.cutoff)
-        if start is not None:
-            start = np.atleast_2d(np.asarray(start, dtype=float))
-            points = np.vstack([start[_inside(start)], points])
-        logliks = _evaluate(records, points, settings, pool)
-        say(f"design: {len(points)} guesses, best log-likelihood {np.max(logliks):.1f}")
-        for round_ in range(0, settings.acquisitions * dimensions, ACQUISITION_BATCH):
-            finite = np.isfinite(logliks)
-            process = surrogate(points[finite], logliks[finite], box, settings.seed + round_)
-            candidates = _prior_draws(4000, rng, settings.states, settings.cutoff)
-            upper = process.upper(candidates, settings.exploration)
-            chosen = candidates[np.argsort(upper)[-ACQUISITION_BATCH:]]
-            points = np.vstack([points, chosen])
-            logliks = np.append(logliks, _evaluate(records, chosen, settings, pool))
-            say(f"acquisitions: {len(points)} guesses, best log-likelihood "
-                f"{np.max(logliks):.1f}")
-    finite = np.isfinite(logliks)
-    process = surrogate(points[finite], logliks[finite], box, settings.seed)
-    best = points[finite][np.argsort(logliks[finite])[-4:]]
-    samples = sample_posterior(process, box, _inside, best, samples=settings.samples,
-                               seed=settings.seed)
+        samples, points, logliks = upper_bound_search(
+            lambda points: _evaluate(records, points, settings, pool), box,
+            lambda count, rng: _prior_draws(count, rng, settings.states, settings.cutoff),
+            _inside, design=settings.design, acquisitions=settings.acquisitions,
+            exploration=settings.exploration, samples=settings.samples, seed=settings.seed,
+            start=start, progress=progress)
     return SliderPosterior(samples, points, logliks, tuple(r.name for r in records),
                            settings.evolution)
 

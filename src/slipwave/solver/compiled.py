@@ -17,7 +17,9 @@ import numba
 import numpy as np
 
 from slipwave.kernels import cache_report
-from slipwave.solver import active_set
+from slipwave.solver import active_set, quasi_dynamic_steps, quasi_dynamic_stretch, stiff_steps
+from slipwave.solver.quasi_dynamic import Drive, simulate_quasi_dynamic, slab_body
+from slipwave.solver.rate_state import RateState
 from slipwave.solver.simulate import Coulomb, LoadPath, SlipWeakening, simulate
 from slipwave.solver.slab import Slab
 
@@ -48,9 +50,12 @@ def compile_callees(names: Sequence[str]) -> dict[str, dict[str, Any]]:
 
     Examples
     --------
-    >>> report = compile_callees(["_same"])  # for the zone states, and for the signs
-    >>> report["_same"]["loaded"] + report["_same"]["compiled"]
+    >>> from slipwave.solver import active_set
+    >>> report = compile_callees(["_same"])
+    >>> len(active_set._same.signatures)  # for the zone states, and for the signs
     2
+    >>> all(kernel["loaded"] + kernel["compiled"] > 0 for kernel in report.values())
+    True
     """
     before = cache_report(active_set)
     body = active_set.zone_solver(np.eye(16), np.zeros(8))
@@ -101,3 +106,32 @@ def compile_solver() -> dict[str, Any]:
     simulate(slab, Coulomb(fs=0.5), LoadPath(normal_control="displacement", max_travel=0.2))
     return {"seconds": round(time.perf_counter() - start, 3), "numba": numba.__version__,
             "kernels": cache_report(active_set)}
+
+
+def compile_quasi_dynamic() -> dict[str, Any]:
+    """Compile the quasi-dynamic contact's kernels, or load them from the disk cache.
+
+    A slab of 8 elements pressed and driven for two seconds under a law that slips then
+    (the steps, the stretches' contact changes and the crossings' records).
+
+    Returns
+    -------
+    dict
+        ``seconds`` (wall), and per kernel its ``cache_path``, ``loaded`` (cache hits)
+        and ``compiled`` (misses).
+
+    Examples
+    --------
+    >>> report = compile_quasi_dynamic()
+    >>> all(k["loaded"] + k["compiled"] >= 1 for k in report["kernels"].values())
+    True
+    """
+    start = time.perf_counter()
+    law = RateState(a=0.01, b=0.015, dc=2e-6, mu0=0.9, v0=1e-6)
+    simulate_quasi_dynamic(slab_body(Slab(elements=8)), law,
+                           Drive(normal_load=85.0, drive_speed=0.048, normal_control="force"),
+                           duration=2.0, sample_rate=10.0)
+    kernels: dict[str, Any] = {}
+    for module in (stiff_steps, quasi_dynamic_steps, quasi_dynamic_stretch):
+        kernels |= cache_report(module)
+    return {"seconds": round(time.perf_counter() - start, 3), "kernels": kernels}

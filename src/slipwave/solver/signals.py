@@ -213,3 +213,47 @@ def step_progress(
     rising = np.clip((time - starts[k]) / np.maximum(peaks[k] - starts[k], 1e-12), 0, 1)
     falling = np.clip((time - peaks[k]) / np.maximum(ends[k] - peaks[k], 1e-12), 0, 1)
     return rising, falling
+
+
+def quasi_dynamic_signals(run: xr.Dataset, *, loading: float, duration: float,
+                          sample_rate: float) -> xr.Dataset:
+    """A quasi-dynamic run as the card records it, noise-free: the pressing, then the run.
+
+    Parameters
+    ----------
+    run
+        From :func:`slipwave.solver.quasi_dynamic.simulate_quasi_dynamic`, on the test's
+        clock (its drive starts at ``loading``).
+    loading
+        The normal loading's time, s: the loads rise from zero to the run's first
+        record over it.
+    duration
+        The recording's length, s.
+    sample_rate
+        The card's samples per second.
+
+    Returns
+    -------
+    xarray.Dataset
+        The channels over ``time``, signed as the card's (:data:`CARD_SIGN`).
+
+    Examples
+    --------
+    >>> run = xr.Dataset({name: ("time", [2.0, 4.0]) for name in CHANNELS},
+    ...                  coords={"time": [1.0, 2.0]})
+    >>> quasi_dynamic_signals(run, loading=1.0, duration=2.0, sample_rate=2.0)["N"].values
+    array([-0., -1., -2., -3.])
+    """
+    time = np.arange(round(duration * sample_rate)) / sample_rate
+    run_time = run["time"].values
+    pressing = np.clip(time / loading, 0.0, 1.0)
+    signals = {}
+    for name in CHANNELS:
+        values = run[name].values
+        signal = np.where(time < loading, pressing * values[0],
+                          np.interp(time, run_time, values))
+        signals[name] = CARD_SIGN[name] * signal
+    return xr.Dataset(
+        {name: ("time", values, dict(CHANNEL_ATTRS[name])) for name, values in signals.items()},
+        coords={"time": ("time", time, dict(CHANNEL_ATTRS["time"]))},
+        attrs={"Conventions": CONVENTIONS})
