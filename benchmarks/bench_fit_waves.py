@@ -23,13 +23,16 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import sys
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import xarray as xr
 
 from bench_quasi_dynamic_tests import setup_of
 from slipwave.bench import BenchTest, simulate_test, write_test
+from slipwave.errors import SlipwaveError
 from slipwave.fit_waves import WavesFitSettings, filmed_test, fit_filmed_test
 from slipwave.io import read_acquisition
 from slipwave.video import find_geometry, kymograph, open_frames, track_waves
@@ -54,28 +57,37 @@ def draw_laws(rng: np.random.Generator, count: int) -> list[dict[str, float]]:
     return laws
 
 
+def made_test(job: tuple[int, dict[str, float]]) -> tuple[BenchTest, xr.Dataset,
+                                                           pd.DataFrame, float]:
+    """A law's virtual test: its spec, card recording, video's waves and CPU time."""
+    k, law = job
+    spec = BenchTest(f"qd{k}", elements=TRUTH_ELEMENTS, duration=DURATION, rate_state=law,
+                     video="ffv1")
+    start = time.process_time()
+    with tempfile.TemporaryDirectory() as folder:
+        paths = write_test(simulate_test(spec, seed=SEED + k), Path(folder))
+        video = paths["video"]
+        waves = track_waves(kymograph(open_frames(video),
+                                      find_geometry(open_frames(video), spec.length)))
+        recording = read_acquisition(paths["csv"])
+    waves["t_start_card"] = spec.camera.acquisition_time(waves["t_start"].to_numpy())
+    return spec, recording, waves, time.process_time() - start
+
+
 def main() -> None:
     tests = int(sys.argv[1]) if len(sys.argv) > 1 else TESTS
     processes = int(sys.argv[2]) if len(sys.argv) > 2 else 2
     print(f"rate-and-state fits of quasi-dynamic tests: load average {os.getloadavg()[0]:.2f} "
           "before")
     settings = WavesFitSettings(elements=FIT_ELEMENTS, processes=processes)
+    laws = draw_laws(np.random.default_rng(SEED), tests)
+    with ProcessPoolExecutor(processes) as pool:  # the tests made side by side first
+        made = list(pool.map(made_test, enumerate(laws)))
     rows = []
-    for k, law in enumerate(draw_laws(np.random.default_rng(SEED), tests)):
-        spec = BenchTest(f"qd{k}", elements=TRUTH_ELEMENTS, duration=DURATION,
-                         rate_state=law, video="ffv1")
-        start = time.process_time()
-        with tempfile.TemporaryDirectory() as folder:
-            paths = write_test(simulate_test(spec, seed=SEED + k), Path(folder))
-            video = paths["video"]
-            waves = track_waves(kymograph(open_frames(video),
-                                          find_geometry(open_frames(video), spec.length)))
-            recording = read_acquisition(paths["csv"])
-        made = time.process_time() - start
-        waves["t_start"] = spec.camera.acquisition_time(waves["t_start"].to_numpy())
+    for law, (spec, recording, waves, seconds_made) in zip(laws, made, strict=True):
         try:
             test = filmed_test(setup_of(spec), recording, waves, frame_rate=spec.camera.fps)
-        except Exception as err:  # a law of the prior that slid steadily: reported
+        except SlipwaveError as err:  # a law of the prior that slid steadily: reported
             print(f"  {spec.test_id}: not fitted ({err})", flush=True)
             continue
         began = time.perf_counter()
@@ -89,12 +101,16 @@ def main() -> None:
                      **{f"{n}": interval[n][0] for n in truth},
                      **{f"{n}_inside": inside[n] for n in truth},
                      "windows": test.windows, "followed": test.followed,
-                     "made_s": made, "fit_s": seconds})
+                     "made_s": seconds_made, "fit_s": seconds})
+        error = posterior.mesh_error
         print(f"  {spec.test_id}: " + "; ".join(
             f"{n} {truth[n]:.4g} -> {interval[n][0]:.4g} [{interval[n][1]:.4g}, "
             f"{interval[n][2]:.4g}]{'' if inside[n] else ' OUTSIDE'}" for n in truth)
-            + f" ({test.windows} windows, {test.followed}/{test.waves} waves followed; made "
-            f"in {made:.0f} s, fitted in {seconds:.0f} s on {processes} processes)", flush=True)
+            + f" ({test.windows} windows of {test.window:.1f} s, {test.followed}/{test.waves} "
+            f"waves followed, median {np.median(test.speeds):.0f} mm/s; mesh error card "
+            f"{error.card.round(4).tolist()}, log speed {error.speed:.3f}; made in "
+            f"{seconds_made:.0f} s of CPU, fitted in {seconds:.0f} s on {processes} "
+            f"processes, {len(posterior.points)} guesses)", flush=True)
     table = pd.DataFrame(rows)
     if len(table):
         covered = table[["a_inside", "b_inside", "dc_um_inside"]].all(axis=1)

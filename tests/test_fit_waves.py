@@ -41,7 +41,8 @@ def observed() -> fit_waves.FilmedTest:
     setup = setup_of(230.0)
     made = simulate_waves(setup, rate_state_law(LAW), elements=40, field_rate=25.0,
                           sample_rate=100.0, frame_rate=25.0)
-    return fit_waves.filmed_test(setup, card(made.run, setup), made.waves, frame_rate=25.0)
+    waves = made.waves.assign(t_start_card=made.waves["t_start"])  # the film's clock is the card's
+    return fit_waves.filmed_test(setup, card(made.run, setup), waves, frame_rate=25.0)
 
 
 def test_a_filmed_test_is_cut_into_windows_of_three_recurrences(observed):

@@ -228,8 +228,8 @@ def filmed_test(setup: TestSetup, recording: xr.Dataset, waves: pd.DataFrame, *,
     recording
         Its card's recording (:func:`slipwave.io.read_acquisition`).
     waves
-        Its video's waves (:func:`slipwave.video.track_waves`), ``t_start`` on the card's
-        clock.
+        Its video's waves (the waves stage's ``waves.csv``: :func:`slipwave.video.track_waves`'
+        columns and ``t_start_card``, the start on the card's clock).
     frame_rate
         The video's frames per second.
     band_mm
@@ -261,8 +261,8 @@ def filmed_test(setup: TestSetup, recording: xr.Dataset, waves: pd.DataFrame, *,
         raise SlipwaveError(f"test {name!r}: {count} windows of {length:.3g} s after the "
                             f"first slip and its settling; the fit needs {MIN_WINDOWS}")
     rows = card_windows(events, recording, settle + loading, length, count)
-    span = (waves["t_start"] >= settle + loading) & (waves["t_start"]
-                                                     < settle + loading + count * length)
+    start = waves["t_start_card"]
+    span = (start >= settle + loading) & (start < settle + loading + count * length)
     seen = waves[span]
     followed = seen[seen["kind"] != "unresolved"]
     if seen.empty:

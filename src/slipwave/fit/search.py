@@ -474,7 +474,7 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
     say = progress or (lambda _: None)
     rng = np.random.default_rng(seed)
     dimensions = box.shape[0]
-    points = draw(design * dimensions, seed)
+    points = draw(design * dimensions, seed) if design else np.zeros((0, dimensions))
     if start is not None:
         start = np.atleast_2d(np.asarray(start, dtype=float))
         points = np.vstack([start[inside(start)], points])
