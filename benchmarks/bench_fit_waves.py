@@ -38,7 +38,7 @@ from slipwave.io import read_acquisition
 from slipwave.video import find_geometry, kymograph, open_frames, track_waves
 from targets import check, finish
 
-SEED = 5107  # the laws' draws, not tuned on: the figures reported are this seed's
+SEED = 5108  # the laws' draws; 5107 ran a search without refinements (one test seen)
 TESTS = 6
 TRUTH_ELEMENTS = 160
 FIT_ELEMENTS = 80

@@ -27,9 +27,9 @@ pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 
 
 # The map runs on a small grid here (the paper's 1572 cases are benchmarked in
-# benchmarks/bench_map.py): two H/L, four f, 40 elements and its band from 20.
+# benchmarks/bench_map.py): two H/L, four f, 20 elements and its band from 10.
 SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n"
-             "  elements: 40\n  band_elements: 20\n")
+             "  elements: 20\n  band_elements: 10\n")
 # and each test's fit is Coulomb's alone, a short search (the full fit is benchmarked), on
 # the fit's default mesh
 SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  stages: 2\n"
@@ -146,18 +146,18 @@ def test_full_run_on_default_campaign(workdir):
     assert whole["height_ratio"].values.tolist() == [0.25, 0.5]
     assert whole["friction"].values.tolist() == [0.4, 0.6, 0.8, 1.0]
     assert set(whole["end"].values.ravel()) == {"gross sliding"}
-    assert whole.attrs["contact_elements"] == 40 and whole.attrs["band_elements"] == 20
-    coarse = read_dataset(workdir / "results/map/rows/20/job0-0.nc")
-    assert coarse.attrs["contact_elements"] == 20 and "mesh_band" in whole
+    assert whole.attrs["contact_elements"] == 20 and whole.attrs["band_elements"] == 10
+    coarse = read_dataset(workdir / "results/map/rows/10/job0-0.nc")
+    assert coarse.attrs["contact_elements"] == 10 and "mesh_band" in whole
     assert len(pd.read_csv(workdir / "results/map/map.csv")) == 8
     for name in ("map.png", "zones.png", "legend.md"):
         assert (workdir / "results/map" / name).stat().st_size > 100
-    for log in ("40/job0-0", "40/job1-0", "20/job0-0", "20/job1-0", "map", "map_figures"):
+    for log in ("20/job0-0", "20/job1-0", "10/job0-0", "10/job1-0", "map", "map_figures"):
         assert (workdir / f"results/logs/map/{log}.log").exists()
     assert "3 tests placed" in (workdir / "results/logs/map/map_figures.log").read_text()
-    assert "successions differ between 20 and 40 elements" in (
+    assert "successions differ between 10 and 20 elements" in (
         workdir / "results/logs/map/map.log").read_text()
-    assert "H/L 0.5: 100%" in (workdir / "results/logs/map/40/job0-0.log").read_text()
+    assert "H/L 0.5: 100%" in (workdir / "results/logs/map/20/job0-0.log").read_text()
 
 
 def test_column_map_from_config(workdir):

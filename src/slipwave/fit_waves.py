@@ -495,6 +495,8 @@ class WavesFitSettings:
     acquisitions
         Points added where the surrogate's upper confidence bound is highest, per
         parameter.
+    refinements
+        Points drawn from the surrogate's posterior, per parameter.
     exploration
         The upper bound's multiple of the surrogate's standard deviation.
     samples
@@ -510,6 +512,7 @@ class WavesFitSettings:
     members: int = 4
     design: int = 5
     acquisitions: int = 5
+    refinements: int = 3
     exploration: float = 2.0
     samples: int = 2000
     processes: int = 1
@@ -664,7 +667,8 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
         samples, points, logliks = upper_bound_search(
             evaluate, PRIOR_BOX, _prior_draws, _inside, design=0,
             acquisitions=settings.acquisitions, exploration=settings.exploration,
-            samples=settings.samples, seed=settings.seed, start=design, progress=progress)
+            samples=settings.samples, seed=settings.seed, refinements=settings.refinements,
+            start=design, progress=progress)
     return WavesPosterior(samples, points, logliks, error)
 
 
