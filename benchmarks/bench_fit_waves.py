@@ -39,7 +39,7 @@ from slipwave.video import find_geometry, kymograph, open_frames, track_waves
 from targets import check, finish
 
 SEED = 5108  # the laws' draws; 5107 ran a search without refinements (one test seen)
-TESTS = 6
+TESTS = 5
 TRUTH_ELEMENTS = 160
 FIT_ELEMENTS = 80
 DURATION = 280.0
