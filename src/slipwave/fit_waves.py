@@ -49,7 +49,8 @@ from slipwave.defaults import BAND_MM
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.fit.likelihood import shrunk_covariance
-from slipwave.fit.search import upper_bound_search
+from slipwave.fit.search import central_intervals, upper_bound_search
+from slipwave.fit.slider import rate_state_values
 from slipwave.setup import TestSetup
 from slipwave.simulate_waves import film_kymograph, on_test_clock
 from slipwave.solver.quasi_dynamic import Drive, record_times, simulate_quasi_dynamic, slab_body
@@ -572,15 +573,9 @@ class WavesPosterior:
         dict
             ``a``, ``b``, ``b_minus_a``, ``dc_um`` (um), ``mu0``: (median, low, high).
         """
-        tail = 50.0 * (1.0 - probability)
-        values = {"a": self.samples[:, 0], "b": self.samples[:, 0] + self.samples[:, 1],
-                  "b_minus_a": self.samples[:, 1], "dc_um": 1e6 * 10.0 ** self.samples[:, 2],
-                  "mu0": self.samples[:, 3]}
-        out = {}
-        for name, v in values.items():
-            middle, low, high = np.percentile(v, [50.0, tail, 100.0 - tail])
-            out[name] = (float(middle), float(low), float(high))
-        return out
+        values = rate_state_values(self.samples)
+        values["dc_um"] = 1e6 * values.pop("dc")
+        return central_intervals(values, probability)
 
     def to_dict(self) -> dict[str, Any]:
         """The fit as JSON-ready values.

@@ -394,6 +394,35 @@ def sample_posterior(process: Surrogate, box: np.ndarray,
 
 
 
+def central_intervals(values: Mapping[str, np.ndarray], probability: float = 0.95
+                      ) -> dict[str, tuple[float, float, float]]:
+    """Each quantity's posterior median and central interval.
+
+    Parameters
+    ----------
+    values
+        Posterior samples of each quantity, by name.
+    probability
+        The interval's probability.
+
+    Returns
+    -------
+    dict
+        Name -> (median, low, high).
+
+    Examples
+    --------
+    >>> [round(value, 6) for value in central_intervals({"x": np.arange(101.0)}, 0.9)["x"]]
+    [50.0, 5.0, 95.0]
+    """
+    tail = 50.0 * (1.0 - probability)
+    out = {}
+    for name, v in values.items():
+        middle, low, high = np.percentile(v, [50.0, tail, 100.0 - tail])
+        out[name] = (float(middle), float(low), float(high))
+    return out
+
+
 ACQUISITION_BATCH = 2
 """Guesses added per refit of the surrogate in :func:`upper_bound_search` (the highest
 upper bounds): the same whatever the number of processes, so that a fit does not depend

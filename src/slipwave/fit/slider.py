@@ -39,7 +39,7 @@ from slipwave.events.stick_slip import (
     slider_window_features,
 )
 from slipwave.fit.likelihood import shrunk_covariance
-from slipwave.fit.search import upper_bound_search
+from slipwave.fit.search import central_intervals, upper_bound_search
 from slipwave.solver.rate_state import RateState, steady_friction
 from slipwave.solver.spring_slider import SpringSlider, simulate_spring_slider
 
@@ -474,6 +474,28 @@ def _prior_draws(count: int, rng: np.random.Generator | int, states: int, cutoff
     return points[_inside(points)][:count]
 
 
+def rate_state_values(samples: np.ndarray) -> dict[str, np.ndarray]:
+    """A one-state law's parameters from samples of :data:`PARAMETERS`.
+
+    Parameters
+    ----------
+    samples
+        Shape (samples, coordinates), the first four :data:`PARAMETERS`.
+
+    Returns
+    -------
+    dict
+        ``a``, ``b``, ``b_minus_a``, ``dc`` (m), ``mu0``: each sample's value.
+
+    Examples
+    --------
+    >>> rate_state_values(np.array([[0.01, 0.02, -5.0, 0.5]]))["b"].round(3).tolist()
+    [0.03]
+    """
+    return {"a": samples[:, 0], "b": samples[:, 0] + samples[:, 1],
+            "b_minus_a": samples[:, 1], "dc": 10.0 ** samples[:, 2], "mu0": samples[:, 3]}
+
+
 @dataclass(frozen=True)
 class SliderPosterior:
     """A spring-slider fit's result.
@@ -534,19 +556,12 @@ class SliderPosterior:
             two-state law, ``cutoff_speed`` (m/s) for a law with a cut-off: (median, low,
             high).
         """
-        tail = 50.0 * (1.0 - probability)
-        values = {"a": self.samples[:, 0], "b": self.samples[:, 0] + self.samples[:, 1],
-                  "b_minus_a": self.samples[:, 1], "dc": 10.0 ** self.samples[:, 2],
-                  "mu0": self.samples[:, 3]}
+        values = rate_state_values(self.samples)
         if self.states == 2:
             values |= {"b2": self.samples[:, 4], "dc2": 10.0 ** self.samples[:, 5]}
         if self.cutoff:
             values |= {"cutoff_speed": 10.0 ** self.samples[:, -1]}
-        out = {}
-        for name, v in values.items():
-            middle, low, high = np.percentile(v, [50.0, tail, 100.0 - tail])
-            out[name] = (float(middle), float(low), float(high))
-        return out
+        return central_intervals(values, probability)
 
 
 def fit_records(records: Sequence[SliderRecord], settings: SliderFitSettings,
