@@ -34,7 +34,7 @@ and the law's v0 (a change of v0 is a change of mu0).
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -98,6 +98,9 @@ FASTEST_FOLLOWED = 1000.0
 
 MIN_WINDOWS = 2
 """Windows a test, and a guess's run, need at least."""
+
+MIN_FOLLOWED = 2
+"""Followed waves a median speed needs (fewer: the speed is not compared)."""
 
 
 @dataclass(frozen=True)
@@ -428,7 +431,7 @@ def mesh_error(coarse: Simulated | None, fine: Simulated | None) -> MeshError:
         return MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
     card = np.abs(np.nanmean(fine.windows, axis=0) - np.nanmean(coarse.windows, axis=0))
     speed = (abs(float(np.median(np.log(fine.speeds)) - np.median(np.log(coarse.speeds))))
-             if min(coarse.followed, fine.followed) >= MIN_WINDOWS else 0.0)
+             if min(coarse.followed, fine.followed) >= MIN_FOLLOWED else 0.0)
     return MeshError(card, speed)
 
 
@@ -470,9 +473,9 @@ def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | Non
     variance = pooled * (1 - pooled) * (1 / test.waves + 1 / waves) + SHARE_FLOOR**2
     difference = test.followed / test.waves - followed / waves
     total += -0.5 * (difference**2 / variance + np.log(2 * np.pi * variance))
-    if test.followed >= MIN_WINDOWS:
+    if test.followed >= MIN_FOLLOWED:
         measured, measured_error = _median_and_error(np.asarray(test.speeds))
-        if simulated.followed >= MIN_WINDOWS:
+        if simulated.followed >= MIN_FOLLOWED:
             median, spread = _median_and_error(simulated.speeds)
         else:  # faster than the frames show: at the fastest speed they follow
             median, spread = np.log(FASTEST_FOLLOWED), measured_error
@@ -665,26 +668,3 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             samples=settings.samples, seed=settings.seed, refinements=settings.refinements,
             start=design, progress=progress)
     return WavesPosterior(samples, points, logliks, error)
-
-
-def law_settings(point: Mapping[str, float]) -> dict[str, float]:
-    """A fitted point as the ``simulate_waves`` section's law.
-
-    Parameters
-    ----------
-    point
-        ``a``, ``b_minus_a``, ``log10_dc``, ``mu0``.
-
-    Returns
-    -------
-    dict
-        ``a``, ``b``, ``dc_um``, ``mu0``, ``v0_um_s``.
-
-    Examples
-    --------
-    >>> law_settings({"a": 0.01, "b_minus_a": 0.02, "log10_dc": -4.0, "mu0": 0.9})
-    {'a': 0.01, 'b': 0.03, 'dc_um': 100.0, 'mu0': 0.9, 'v0_um_s': 1.0}
-    """
-    return {"a": point["a"], "b": round(point["a"] + point["b_minus_a"], 12),
-            "dc_um": round(1e6 * 10.0 ** point["log10_dc"], 9), "mu0": point["mu0"],
-            "v0_um_s": 1.0}
