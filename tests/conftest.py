@@ -1,9 +1,11 @@
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+
+from dry_runs import SnakemakeRunner, environment
 
 CANONICAL = """\
 # test_id: t1
@@ -31,6 +33,14 @@ def write(tmp_path: Path) -> Callable[..., Path]:
         return path
 
     return _write
+
+
+@pytest.fixture(scope="module")
+def snakemake_cli(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SnakemakeRunner]:
+    """Snakemake's command line, run by a helper that imports it once (:mod:`dry_runs`)."""
+    runner = SnakemakeRunner(environment(), tmp_path_factory.mktemp("snakemake"))
+    yield runner
+    runner.close()
 
 
 # The files that take longest go first: `make test`'s two workers take whole files in

@@ -7,11 +7,8 @@ file, the line or frame, what is wrong, and no traceback.
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -161,8 +158,6 @@ def test_malformed_bench_config(tmp_path, capsys, name):
     assert not (tmp_path / "out").exists()
 
 
-BIN = Path(sys.executable).parent
-ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
 TABLE = "test_id\tcsv\tframes\tcolumns\tedge_reference\n"
 CSV = str(ROOT / "raw_data/bench/hl050.csv")
 
@@ -192,15 +187,14 @@ WORKFLOW_CASES = {
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(WORKFLOW_CASES))
-def test_malformed_workflow_config_stops_before_any_job(tmp_path, name):
+def test_malformed_workflow_config_stops_before_any_job(snakemake_cli, tmp_path, name):
     config, table, expected = WORKFLOW_CASES[name]
     for item in ("Snakefile", "workflow", "config"):
         source = ROOT / item
         (shutil.copytree if source.is_dir() else shutil.copy)(source, tmp_path / item)
     (tmp_path / "t.tsv").write_text(table or TABLE + f"a\t{CSV}\t\t\t\n")
     (tmp_path / "c.yaml").write_text(config or "tests: t.tsv\n")
-    run = subprocess.run([str(BIN / "snakemake"), "-n", "--configfile", "c.yaml"], cwd=tmp_path,
-                         capture_output=True, text=True, timeout=300, check=False, env=ENV)
+    run = snakemake_cli(tmp_path, "-n", "--configfile", "c.yaml")
     assert run.returncode != 0
     output = run.stdout + run.stderr
     assert re.search(expected, output), output

@@ -9,22 +9,18 @@ detection it used.
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
-import subprocess
-import sys
 from collections import defaultdict
 from pathlib import Path
 
 import pytest
 
+from dry_runs import SnakemakeRunner
 from slipwave.cli import build_parser
 from slipwave.events import DetectionSettings
 
 ROOT = Path(__file__).parents[1]
-BIN = Path(sys.executable).parent
-ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
 
 DETECTING = {"detect", "fit", "simulate", "compare"}
 # config key (section, key, a value other than the default) -> the rules it reaches
@@ -87,14 +83,13 @@ def _yaml(value: object) -> str:
     return str(value)
 
 
-def commands(workdir: Path, extra: str = "") -> dict[str, list[str]]:
+def commands(snakemake_cli: SnakemakeRunner, workdir: Path, extra: str = ""
+             ) -> dict[str, list[str]]:
     """Every rule's shell commands in a forced dry run, with ``extra`` config appended."""
     override = workdir / "override.yaml"
     override.write_text(extra or "{}\n")
-    run = subprocess.run([str(BIN / "snakemake"), "-n", "-F", "-p", "--cores", "2",
-                          "--configfile", "config/config.yaml", str(override)],
-                         cwd=workdir, capture_output=True, text=True, timeout=300, env=ENV,
-                         check=False)
+    run = snakemake_cli(workdir, "-n", "-F", "-p", "--cores", "2", "--configfile",
+                        "config/config.yaml", str(override))
     assert run.returncode == 0, run.stdout + run.stderr
     found: dict[str, list[str]] = defaultdict(list)
     rule = ""
@@ -116,35 +111,36 @@ def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def default_commands(workdir: Path) -> dict[str, list[str]]:
-    return commands(workdir)
+def default_commands(snakemake_cli: SnakemakeRunner, workdir: Path) -> dict[str, list[str]]:
+    return commands(snakemake_cli, workdir)
 
 
 @pytest.mark.parametrize(("section", "key", "value", "rules"), REACHES,
                          ids=[f"{s}.{k}" if s else k for s, k, _, _ in REACHES])
-def test_a_setting_reaches_exactly_the_stages_that_use_it(workdir, default_commands, section,
-                                                          key, value, rules):
+def test_a_setting_reaches_exactly_the_stages_that_use_it(snakemake_cli, workdir,
+                                                          default_commands, section, key,
+                                                          value, rules):
     extra = (f"{section}:\n  {key}: {_yaml(value)}\n" if section
              else f"{key}: {_yaml(value)}\n")
-    changed = commands(workdir, extra)
+    changed = commands(snakemake_cli, workdir, extra)
     assert set(changed) == set(default_commands)
     assert {name for name in changed if changed[name] != default_commands[name]} == rules
 
 
-def test_without_quasi_dynamic_runs_compare_takes_no_simulated_waves(workdir):
-    off = commands(workdir, "simulate_waves:\n  enabled: false\n")
+def test_without_quasi_dynamic_runs_compare_takes_no_simulated_waves(snakemake_cli, workdir):
+    off = commands(snakemake_cli, workdir, "simulate_waves:\n  enabled: false\n")
     assert "simulate_waves" not in off
     assert not any("--simulated-waves" in line for line in off["compare"])
-    on = commands(workdir)
+    on = commands(snakemake_cli, workdir)
     filmed = [line for line in on["compare"] if "--waves" in line]
     assert filmed and all("--simulated-waves" in line for line in filmed)
     assert len(on["simulate_waves"]) == len(filmed)
 
 
-def test_without_fits_the_gross_edge_ratio_reaches_detection_alone(workdir):
+def test_without_fits_the_gross_edge_ratio_reaches_detection_alone(snakemake_cli, workdir):
     unfitted = "fit:\n  enabled: false\n"
-    before = commands(workdir, unfitted)
-    after = commands(workdir, unfitted + "detection:\n  gross_edge_ratio: 1.2\n")
+    before = commands(snakemake_cli, workdir, unfitted)
+    after = commands(snakemake_cli, workdir, unfitted + "detection:\n  gross_edge_ratio: 1.2\n")
     assert {name for name in after if after[name] != before.get(name)} == {"detect"}
     assert all("--gross-edge-ratio 1.2" in line for line in after["detect"])
 
