@@ -58,13 +58,20 @@ def test_a_filmed_test_is_cut_into_windows_of_three_recurrences(observed):
 def test_the_likelihood_prefers_the_law_that_made_the_test(observed):
     # the same mesh and the camera's noise of another seed: the law that made it against
     # one of D_c three times shorter (faster fronts, shorter cycle) and one weakening less
-    at = {name: fit_waves.loglik(observed, fit_waves.simulate_guess(
-        observed, fit_waves.law_at(point), elements=40, members=3, seed=7))
-        for name, point in {"truth": TRUTH,
-                            "short dc": TRUTH - [0.0, 0.0, np.log10(3.0), 0.0],
-                            "less weakening": TRUTH - [0.0, 0.01, 0.0, 0.0]}.items()}
+    runs = {name: fit_waves.simulate_guess(observed, fit_waves.law_at(point), elements=40,
+                                           members=3, seed=7)
+            for name, point in {"truth": TRUTH,
+                                "short dc": TRUTH - [0.0, 0.0, np.log10(3.0), 0.0],
+                                "less weakening": TRUTH - [0.0, 0.01, 0.0, 0.0]}.items()}
+    at = {name: fit_waves.loglik(observed, run) for name, run in runs.items()}
     assert np.isfinite(at["truth"])
     assert at["truth"] > at["short dc"] + 3.0 and at["truth"] > at["less weakening"] + 3.0
+    # the emulator's likelihood, given the runs' own features exactly, orders them alike
+    emulated = fit_waves.emulated_loglik(observed, fit_waves.RunScatter.of(list(runs.values())),
+                                         fit_waves.mesh_error(None, None), members=3)
+    features = np.array([fit_waves.run_features(run) for run in runs.values()])
+    truth, short, weaker = emulated(features, np.zeros_like(features))
+    assert truth > short + 3.0 and truth > weaker + 3.0
 
 
 def test_a_failed_run_or_a_run_without_slips_has_no_likelihood(observed):

@@ -48,8 +48,9 @@ from slipwave.compare import MEDIAN_ERROR
 from slipwave.defaults import BAND_MM
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
+from slipwave.fit.emulator import emulator_search
 from slipwave.fit.likelihood import shrunk_covariance
-from slipwave.fit.search import central_intervals, upper_bound_search
+from slipwave.fit.search import central_intervals
 from slipwave.fit.slider import rate_state_values
 from slipwave.setup import TestSetup
 from slipwave.simulate_waves import film_kymograph, on_test_clock
@@ -484,6 +485,162 @@ def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | Non
     return float(total)
 
 
+def run_features(simulated: Simulated | None) -> np.ndarray:
+    """A run's features as the emulator learns them.
+
+    Parameters
+    ----------
+    simulated
+        The run (:func:`simulate_guess`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The mean of its windows' :data:`CARD_FEATURES`, its share of waves followed (of
+        one, where it had none) and the log median speed of those followed (at
+        :data:`FASTEST_FOLLOWED` where fewer than :data:`MIN_FOLLOWED`), as
+        :func:`loglik` reads them; NaN where it failed or has fewer than
+        :data:`MIN_WINDOWS` windows.
+
+    Examples
+    --------
+    >>> run = Simulated(np.array([[0.80, 0.10, 2.5], [0.82, 0.10, 2.7]]), 4, 1,
+    ...                 np.array([200.0]))
+    >>> run_features(run).round(3).tolist()
+    [0.81, 0.1, 2.6, 0.25, 6.908]
+    """
+    if simulated is None:
+        return np.full(len(CARD_FEATURES) + len(WAVE_FEATURES), np.nan)
+    finite = simulated.windows[np.all(np.isfinite(simulated.windows), axis=1)]
+    if finite.shape[0] < MIN_WINDOWS:
+        return np.full(len(CARD_FEATURES) + len(WAVE_FEATURES), np.nan)
+    speed = (float(np.median(np.log(simulated.speeds)))
+             if simulated.followed >= MIN_FOLLOWED else float(np.log(FASTEST_FOLLOWED)))
+    return np.array([*finite.mean(axis=0), simulated.followed / max(simulated.waves, 1),
+                     speed])
+
+
+@dataclass(frozen=True)
+class RunScatter:
+    """What a run's features scatter by, typical over the runs made.
+
+    The emulator's likelihood takes the features' means from the emulator and their
+    scatter from here.
+
+    Attributes
+    ----------
+    card
+        The variance of a window's card features (the median over the runs).
+    waves
+        Waves per run (the median, at least one).
+    speed
+        The standard error of a run's log median speed (the median over the runs
+        with :data:`MIN_FOLLOWED` followed waves; None where none had).
+
+    """
+
+    card: np.ndarray
+    waves: float
+    speed: float | None
+
+    @classmethod
+    def of(cls, runs: list[Simulated | None]) -> RunScatter:
+        """The typical scatter of runs.
+
+        Parameters
+        ----------
+        runs
+            Runs of :func:`simulate_guess` (None: failed, left out).
+
+        Returns
+        -------
+        RunScatter
+            Over the runs with :data:`MIN_WINDOWS` windows.
+
+        Examples
+        --------
+        >>> run = Simulated(np.array([[0.80, 0.10, 2.5], [0.82, 0.10, 2.7]]), 4, 2,
+        ...                 np.array([200.0, 220.0]))
+        >>> scatter = RunScatter.of([run, None])
+        >>> scatter.card.round(4).tolist(), scatter.waves
+        ([0.0002, 0.0, 0.02], 4.0)
+        """
+        made = [run for run in runs if run is not None
+                and np.all(np.isfinite(run.windows), axis=1).sum() >= MIN_WINDOWS]
+        card = np.median([np.var(run.windows[np.all(np.isfinite(run.windows), axis=1)],
+                                 axis=0, ddof=1) for run in made], axis=0)
+        speeds = [_median_and_error(run.speeds)[1] for run in made
+                  if run.followed >= MIN_FOLLOWED]
+        return cls(card, max(float(np.median([run.waves for run in made])), 1.0),
+                   float(np.median(speeds)) if speeds else None)
+
+
+def emulated_loglik(test: FilmedTest, scatter: RunScatter, error: MeshError, members: int
+                    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """The test's log-likelihood given emulated features (:func:`run_features`' order).
+
+    As :func:`loglik` reads a run, with the card features' covariance diagonal (the
+    runs' typical window variance times (1/n + 1/K)) and each feature's emulator
+    variance added to its own.
+
+    Parameters
+    ----------
+    test
+        The test.
+    scatter
+        The runs' typical scatter.
+    error
+        The features' error from the mesh.
+    members
+        Windows K of a run.
+
+    Returns
+    -------
+    callable
+        ``(means, variances) -> log-likelihoods``, each argument of shape (n, 5).
+
+    Examples
+    --------
+    >>> from slipwave.setup import TestSetup
+    >>> test = FilmedTest(TestSetup("t", {}, "frame"), 25.0, (0.5, 3.0), 60.0, 60.0,
+    ...                   (0.80, 0.10, 2.5), (0.001, 0.001, 0.0), 3, 6, 6,
+    ...                   (200.0, 210.0, 190.0, 205.0, 200.0, 195.0))
+    >>> scatter = RunScatter(np.array([1e-6, 1e-6, 0.0]), 6.0, 0.02)
+    >>> rate = emulated_loglik(test, scatter, MeshError(np.zeros(3), 0.0), 4)
+    >>> near = np.array([[0.80, 0.10, 2.5, 1.0, np.log(200.0)]])
+    >>> off = near + [0.01, 0.0, 0.0, 0.0, 0.0]
+    >>> bool(rate(near, np.zeros((1, 5)))[0] - rate(off, np.zeros((1, 5)))[0] > 3)
+    True
+    """
+    card_variance = (scatter.card * (1.0 / test.windows + 1.0 / members)
+                     + np.asarray(test.spread) ** 2 / test.windows + CARD_FLOOR**2
+                     + error.card**2)
+    observed = np.asarray(test.observed)
+    measured = (_median_and_error(np.asarray(test.speeds))
+                if test.followed >= MIN_FOLLOWED else None)
+
+    def gaussian(difference: np.ndarray, variance: np.ndarray) -> np.ndarray:
+        return -0.5 * (difference**2 / variance + np.log(2 * np.pi * variance))
+
+    def rate(means: np.ndarray, variances: np.ndarray) -> np.ndarray:
+        card = len(CARD_FEATURES)
+        total = gaussian(means[:, :card] - observed, card_variance + variances[:, :card]
+                         ).sum(axis=1)
+        share = np.clip(means[:, card], 0.0, 1.0)
+        pooled = (test.followed + share * scatter.waves) / (test.waves + scatter.waves)
+        variance = (pooled * (1 - pooled) * (1 / test.waves + 1 / scatter.waves)
+                    + SHARE_FLOOR**2 + variances[:, card])
+        total += gaussian(test.followed / test.waves - share, variance)
+        if measured is not None:
+            spread = scatter.speed if scatter.speed is not None else measured[1]
+            variance = (measured[1] ** 2 + spread**2 + SPEED_FLOOR**2 + error.speed**2
+                        + variances[:, card + 1])
+            total += gaussian(measured[0] - means[:, card + 1], variance)
+        return total
+
+    return rate
+
+
 @dataclass(frozen=True)
 class WavesFitSettings:
     """How the fit of a filmed test searches.
@@ -496,13 +653,8 @@ class WavesFitSettings:
         Windows K of each guess's run.
     design
         Points of the first Latin hypercube, per parameter.
-    acquisitions
-        Points added where the surrogate's upper confidence bound is highest, per
-        parameter.
     refinements
-        Points drawn from the surrogate's posterior, per parameter.
-    exploration
-        The upper bound's multiple of the surrogate's standard deviation.
+        Points drawn from the emulator's posterior, per parameter.
     samples
         Posterior samples kept.
     processes
@@ -515,9 +667,7 @@ class WavesFitSettings:
     elements: int = 80
     members: int = 4
     design: int = 5
-    acquisitions: int = 5
-    refinements: int = 3
-    exploration: float = 2.0
+    refinements: int = 6
     samples: int = 2000
     processes: int = 1
     seed: int = 0
@@ -604,11 +754,12 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
                     progress: Callable[[str], None] | None = None) -> WavesPosterior:
     """The posterior of (a, b - a, log10 D_c, mu0) given a filmed test.
 
-    The design's guesses are run first; at the best of them the run is repeated on twice
-    the mesh and the features' change (:func:`mesh_error`) is carried by every
-    likelihood from then on (the design's too), so that an interval does not claim what
-    the guesses' mesh cannot resolve. Then the search
-    (:func:`~slipwave.fit.search.upper_bound_search`).
+    The features of the guesses' runs (:func:`run_features`) are emulated
+    (:func:`slipwave.fit.emulator.emulator_search`), and the posterior is the test's
+    likelihood given the emulated features (:func:`emulated_loglik`). After the design's
+    runs, the best of them by :func:`loglik` is run again on twice the mesh, and the
+    features' change (:func:`mesh_error`) is carried by every likelihood from then on, so
+    that an interval does not claim what the guesses' mesh cannot resolve.
 
     Parameters
     ----------
@@ -622,15 +773,17 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
     Returns
     -------
     WavesPosterior
-        Its samples, guesses and the mesh error carried.
+        Its samples, guesses (with their :func:`loglik`) and the mesh error carried.
 
     Raises
     ------
     SlipwaveError
-        If no guess of the design has a likelihood.
+        If too few guesses of the design have a run to emulate.
     """
     say = progress or (lambda _: None)
-    runs: dict[tuple[float, ...], Simulated | None] = {}
+    runs: list[Simulated | None] = []
+    guesses: list[np.ndarray] = []
+    measured: list[MeshError] = []
     with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
           else contextlib.nullcontext()) as pool:
 
@@ -640,31 +793,37 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
                 return [_simulate_job(job) for job in jobs]
             return list(pool.map(_simulate_job, jobs))
 
-        def run(points: np.ndarray) -> list[Simulated | None]:
-            missing = [point for point in points if tuple(point) not in runs]
-            if missing:
-                made = simulated(np.array(missing), settings.elements)
-                runs.update(zip((tuple(point) for point in missing), made, strict=True))
-            return [runs[tuple(point)] for point in points]
+        def simulate(points: np.ndarray) -> np.ndarray:
+            made = simulated(points, settings.elements)
+            runs.extend(made)
+            guesses.extend(points)
+            if not measured:  # the design's: its best run again on twice the mesh
+                first = np.array([loglik(test, run) for run in made])
+                if np.isfinite(first).any():
+                    best = int(np.nanargmax(np.where(np.isfinite(first), first, np.nan)))
+                    fine = simulated(points[best][None, :], 2 * settings.elements)[0]
+                    measured.append(mesh_error(made[best], fine))
+                    say(f"mesh error at the design's best guess ({settings.elements} "
+                        f"against {2 * settings.elements} elements): card "
+                        f"{measured[0].card.round(4).tolist()}, log speed "
+                        f"{measured[0].speed:.3f}")
+            return np.array([run_features(run) for run in made])
 
-        design = _prior_draws(settings.design * len(PARAMETERS), settings.seed)
-        first = np.array([loglik(test, made) for made in run(design)])
-        if not np.isfinite(first).any():
-            raise SlipwaveError(f"test {test.setup.test_id!r}: the solver followed none of "
-                                f"the {len(design)} laws of the design: nothing to search")
-        best = design[int(np.nanargmax(np.where(np.isfinite(first), first, np.nan)))]
-        fine = simulated(best[None, :], 2 * settings.elements)[0]
-        error = mesh_error(runs[tuple(best)], fine)
-        say(f"mesh error at the design's best guess ({settings.elements} against "
-            f"{2 * settings.elements} elements): card {error.card.round(4).tolist()}, "
-            f"log speed {error.speed:.3f}")
+        def carried() -> MeshError:
+            return measured[0] if measured else MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
 
-        def evaluate(points: np.ndarray) -> np.ndarray:
-            return np.array([loglik(test, made, error) for made in run(points)])
+        def likelihood(means: np.ndarray, variances: np.ndarray) -> np.ndarray:
+            # the runs' scatter as made so far (the emulator is refitted after each batch)
+            rate = emulated_loglik(test, RunScatter.of(runs), carried(), settings.members)
+            return rate(means, variances)
 
-        samples, points, logliks = upper_bound_search(
-            evaluate, PRIOR_BOX, _prior_draws, _inside, design=0,
-            acquisitions=settings.acquisitions, exploration=settings.exploration,
-            samples=settings.samples, seed=settings.seed, refinements=settings.refinements,
-            start=design, progress=progress)
+        try:
+            samples, points, _, _ = emulator_search(
+                simulate, PRIOR_BOX, _prior_draws, _inside, likelihood,
+                design=settings.design, refinements=settings.refinements,
+                samples=settings.samples, seed=settings.seed, progress=progress)
+        except SlipwaveError as err:
+            raise SlipwaveError(f"test {test.setup.test_id!r}: {err}") from err
+    error = carried()
+    logliks = np.array([loglik(test, run, error) for run in runs])
     return WavesPosterior(samples, points, logliks, error)

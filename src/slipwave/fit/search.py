@@ -22,6 +22,7 @@ import time as clock
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import emcee
 import numpy as np
@@ -347,7 +348,25 @@ def _walkers_start(starts: np.ndarray, box: np.ndarray,
     return found[:walkers]
 
 
-def sample_posterior(process: Surrogate, box: np.ndarray,
+class LogLikelihood(Protocol):
+    """What :func:`sample_posterior` samples: a log-likelihood at points."""
+
+    def loglik(self, points: np.ndarray) -> np.ndarray:
+        """The log-likelihood at points.
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters).
+
+        Returns
+        -------
+        numpy.ndarray
+            One per point.
+        """
+
+
+def sample_posterior(process: LogLikelihood, box: np.ndarray,
                      inside: Callable[[np.ndarray], np.ndarray], starts: np.ndarray, *,
                      samples: int, seed: int) -> np.ndarray:
     """Samples of prior x exp(surrogate mean) over the box (emcee).
@@ -355,7 +374,7 @@ def sample_posterior(process: Surrogate, box: np.ndarray,
     Parameters
     ----------
     process
-        The surrogate (:func:`surrogate`).
+        The surrogate (:func:`surrogate`) or any model of the log-likelihood.
     box
         The search box.
     inside

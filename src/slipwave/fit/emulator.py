@@ -1,0 +1,224 @@
+"""A posterior from Gaussian processes of a simulator's features, for a thin likelihood.
+
+Where the simulator is nearly deterministic and its features nearly exact (a quasi-dynamic
+run's cycle repeats to 10⁻⁴ in T/|N| from window to window), the likelihood is a thin
+ridge through the parameters: fewer features than parameters, each known to its floor.
+A process of the log-likelihood (:class:`slipwave.fit.search.Surrogate`) must then find a
+needle with a few dozen guesses. The features themselves vary smoothly over the prior, so
+here each is emulated by its own Gaussian process (Wilkinson 2014, "Accelerating ABC
+methods using Gaussian processes", AISTATS; the emulation of summaries of Jabot et al.
+2014), and the likelihood is computed from the emulated features with the emulator's
+own variance added to the features' (what it has not seen widens the posterior rather
+than hiding it). The guesses after a Latin hypercube are drawn from that posterior
+(emcee), each batch refitting the emulator where the posterior is: the ridge is found by
+the emulator's likelihood, sharp as the data make it, not by the guesses.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+from slipwave.errors import SlipwaveError
+from slipwave.fit.search import ACQUISITION_BATCH, BEST_STARTS, sample_posterior, scaled
+
+
+@dataclass(frozen=True)
+class FeatureEmulator:
+    """Gaussian processes of a simulator's features over a box, one per feature.
+
+    Attributes
+    ----------
+    processes
+        The fitted processes (inputs scaled to the box's unit cube).
+    box
+        The box, shape (parameters, 2).
+    loglik_of
+        The log-likelihood given the features' predicted means and variances, each of
+        shape (n, features).
+
+    """
+
+    processes: tuple[GaussianProcessRegressor, ...]
+    box: np.ndarray
+    loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+    def predict(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The features' means and variances at points.
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Each of shape (n, features).
+        """
+        unit = scaled(np.atleast_2d(points), self.box)
+        predicted = [process.predict(unit, return_std=True) for process in self.processes]
+        means = np.column_stack([mean for mean, _ in predicted])
+        spreads = np.column_stack([sd for _, sd in predicted])
+        return means, spreads**2
+
+    def loglik(self, points: np.ndarray) -> np.ndarray:
+        """The log-likelihood of the emulated features at points.
+
+        Parameters
+        ----------
+        points
+            Shape (n, parameters).
+
+        Returns
+        -------
+        numpy.ndarray
+            One per point.
+        """
+        return self.loglik_of(*self.predict(points))
+
+
+def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
+            loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], seed: int
+            ) -> FeatureEmulator:
+    """Fit one Gaussian process per feature (a constant times an anisotropic RBF, plus noise).
+
+    Parameters
+    ----------
+    points
+        Shape (n, parameters).
+    features
+        Shape (n, features), finite.
+    box
+        The box the inputs are scaled by.
+    loglik_of
+        As :attr:`FeatureEmulator.loglik_of`.
+    seed
+        The optimiser's restarts' seed.
+
+    Returns
+    -------
+    FeatureEmulator
+        The processes.
+    """
+    p = points.shape[1]
+    processes = []
+    for column in features.T:
+        kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(p, 0.3), (1e-2, 1e1))
+                  + WhiteKernel(1e-3, (1e-8, 1e0)))
+        process = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=2,
+                                           random_state=seed)
+        with warnings.catch_warnings():  # a length scale at its bound is an answer
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            process.fit(scaled(points, box), column)
+        processes.append(process)
+    return FeatureEmulator(tuple(processes), box, loglik_of)
+
+
+def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarray,
+                    draw: Callable[[int, np.random.Generator | int], np.ndarray],
+                    inside: Callable[[np.ndarray], np.ndarray],
+                    loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], *,
+                    design: int, refinements: int, samples: int, seed: int,
+                    progress: Callable[[str], None] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, FeatureEmulator]:
+    """A posterior from an emulator of the features, its guesses drawn from its posterior.
+
+    A Latin hypercube of the prior (``design`` points per coordinate); then batches of
+    :data:`~slipwave.fit.search.ACQUISITION_BATCH` guesses drawn from the emulator's
+    posterior, the emulator refitted after each (``refinements`` per coordinate); then
+    emcee on prior x exp(emulated log-likelihood).
+
+    Parameters
+    ----------
+    simulate
+        The features at guesses, shape (n, features) for (n, coordinates); a row of NaN
+        where the simulation failed.
+    box
+        The prior's box, one row (low, high) per coordinate.
+    draw
+        ``draw(count, rng)``: ``count`` points of the prior.
+    inside
+        Whether points lie in the prior.
+    loglik_of
+        The log-likelihood given features' means and variances (:class:`FeatureEmulator`).
+    design, refinements
+        Guesses of the design and from the emulator's posterior, per coordinate.
+    samples
+        Posterior samples kept.
+    seed
+        The search's seed.
+    progress
+        Called with a line after each batch.
+
+    Returns
+    -------
+    tuple
+        The posterior samples, the guesses, their features and the last emulator.
+
+    Raises
+    ------
+    SlipwaveError
+        If fewer guesses of the design than coordinates plus two have features.
+
+    Examples
+    --------
+    Two features of three parameters, x + y and y - z, measured as 1.0 and 0.2 to 0.01:
+    a ridge, which the posterior follows without a guess on it.
+
+    >>> from scipy.stats import qmc
+    >>> box = np.array([[0.0, 1.0]] * 3)
+    >>> def draw(count, rng):
+    ...     return qmc.LatinHypercube(d=3, seed=rng).random(count)
+    >>> def inside(x):
+    ...     return np.all((x >= 0.0) & (x <= 1.0), axis=1)
+    >>> def loglik_of(means, variances):
+    ...     total = variances + 0.01**2
+    ...     return -0.5 * (((means - [1.0, 0.2]) ** 2) / total + np.log(total)).sum(axis=1)
+    >>> def simulate(x):
+    ...     return np.column_stack([x[:, 0] + x[:, 1], x[:, 1] - x[:, 2]])
+    >>> drawn, points, features, _ = emulator_search(
+    ...     simulate, box, draw, inside, loglik_of, design=4, refinements=2, samples=2000,
+    ...     seed=1)
+    >>> sums = drawn[:, 0] + drawn[:, 1]
+    >>> round(float(sums.mean()), 2), float(sums.std()) < 0.02, float(drawn[:, 0].std()) > 0.1
+    (1.0, True, True)
+    """
+    say = progress or (lambda _: None)
+    rng = np.random.default_rng(seed)
+    dimensions = box.shape[0]
+    points = draw(design * dimensions, seed)
+    features = np.asarray(simulate(points), dtype=float)
+
+    def fitted(round_: int) -> FeatureEmulator:
+        finite = np.all(np.isfinite(features), axis=1)
+        if finite.sum() < dimensions + 2:
+            raise SlipwaveError(f"{finite.sum()} of {len(points)} guesses have features (the "
+                                "simulations failed): too few to emulate them")
+        return emulate(points[finite], features[finite], box, loglik_of, seed + round_)
+
+    def best(emulator: FeatureEmulator) -> np.ndarray:
+        finite = np.all(np.isfinite(features), axis=1)
+        candidates = points[finite]
+        return candidates[np.argsort(emulator.loglik(candidates))[-BEST_STARTS:]]
+
+    say(f"design: {len(points)} guesses")
+    for round_ in range(0, refinements * dimensions, ACQUISITION_BATCH):
+        emulator = fitted(round_)
+        draws = sample_posterior(emulator, box, inside, best(emulator), samples=200,
+                                 seed=int(rng.integers(2**31)))
+        chosen = draws[rng.choice(draws.shape[0], ACQUISITION_BATCH, replace=False)]
+        points = np.vstack([points, chosen])
+        features = np.vstack([features, np.asarray(simulate(chosen), dtype=float)])
+        say(f"refinements: {len(points)} guesses, the emulator's best log-likelihood "
+            f"{float(np.max(emulator.loglik(points))):.1f}")
+    emulator = fitted(refinements * dimensions)
+    drawn = sample_posterior(emulator, box, inside, best(emulator), samples=samples,
+                             seed=seed)
+    return drawn, points, features, emulator
