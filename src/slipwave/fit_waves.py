@@ -3,8 +3,8 @@
 The quasi-dynamic contact (:func:`slipwave.simulate_waves.simulate_waves`) gives a
 rate-and-state law's slips a duration and its waves a speed; here a test's a, b - a,
 D_c and mu0 (at v0 1 um/s, the aging law) are inferred from what its card and its video
-measure, by a synthetic likelihood (Wood 2010) searched as the spring-slider fit searches
-(:func:`slipwave.fit.search.upper_bound_search`).
+measure, by a synthetic likelihood (Wood 2010) read from an emulator of the runs'
+features (:func:`slipwave.fit.emulator.emulator_search`).
 
 **The statistic.** The test after its first slip and one settling window is cut into
 windows of :data:`WINDOW_RECURRENCES` of its slips' median recurrence; each window's

@@ -184,7 +184,7 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
     >>> def simulate(x):
     ...     return np.column_stack([x[:, 0] + x[:, 1], x[:, 1] - x[:, 2]])
     >>> drawn, points, features, _ = emulator_search(
-    ...     simulate, box, draw, inside, loglik_of, design=4, refinements=2, samples=2000,
+    ...     simulate, box, draw, inside, loglik_of, design=4, refinements=1, samples=1000,
     ...     seed=1)
     >>> sums = drawn[:, 0] + drawn[:, 1]
     >>> round(float(sums.mean()), 2), float(sums.std()) < 0.02, float(drawn[:, 0].std()) > 0.1

@@ -458,7 +458,7 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
                        draw: Callable[[int, np.random.Generator | int], np.ndarray],
                        inside: Callable[[np.ndarray], np.ndarray], *, design: int,
                        acquisitions: int, exploration: float, samples: int, seed: int,
-                       refinements: int = 0, start: np.ndarray | None = None,
+                       start: np.ndarray | None = None,
                        progress: Callable[[str], None] | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A posterior from a surrogate of a likelihood, its guesses chosen by upper bound.
@@ -466,10 +466,8 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
     A Latin hypercube of the prior (``design`` points per coordinate), then batches of
     :data:`ACQUISITION_BATCH` guesses where the surrogate's upper confidence bound is
     highest among :data:`CANDIDATES` prior draws (``acquisitions`` per coordinate), then
-    batches drawn from the surrogate's own posterior (``refinements`` per coordinate:
-    where it claims mass it has not seen, it is corrected), then emcee on prior x
-    exp(surrogate mean) (:func:`sample_posterior`): BOLFI's scheme without its zooming
-    stages, for a likelihood cheap enough to search the prior whole.
+    emcee on prior x exp(surrogate mean) (:func:`sample_posterior`): BOLFI's scheme
+    without its zooming stages, for a likelihood cheap enough to search the prior whole.
 
     Parameters
     ----------
@@ -483,9 +481,8 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
         restricted to the prior), ``rng`` a seed or a generator.
     inside
         Whether points lie in the prior.
-    design, acquisitions, refinements
-        Guesses of the design, of the acquisitions and from the surrogate's posterior,
-        per coordinate.
+    design, acquisitions
+        Guesses of the design and of the acquisitions, per coordinate.
     exploration
         The upper bound's multiple of the surrogate's standard deviation.
     samples
@@ -525,7 +522,7 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
     say = progress or (lambda _: None)
     rng = np.random.default_rng(seed)
     dimensions = box.shape[0]
-    points = draw(design * dimensions, seed) if design else np.zeros((0, dimensions))
+    points = draw(design * dimensions, seed)
     if start is not None:
         start = np.atleast_2d(np.asarray(start, dtype=float))
         points = np.vstack([start[inside(start)], points])
@@ -552,14 +549,6 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
         finite = np.isfinite(logliks)
         return points[finite][np.argsort(logliks[finite])[-BEST_STARTS:]]
 
-    for round_ in range(0, refinements * dimensions, ACQUISITION_BATCH):
-        draws = sample_posterior(fitted(round_), box, inside, best(), samples=200,
-                                 seed=int(rng.integers(2**31)))
-        chosen = draws[rng.choice(draws.shape[0], ACQUISITION_BATCH, replace=False)]
-        points = np.vstack([points, chosen])
-        logliks = np.append(logliks, np.asarray(evaluate(chosen), dtype=float))
-        say(f"refinements: {len(points)} guesses, best log-likelihood "
-            f"{np.nanmax(logliks):.1f}")
     drawn = sample_posterior(fitted(0), box, inside, best(), samples=samples, seed=seed)
     return drawn, points, logliks
 
