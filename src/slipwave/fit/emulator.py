@@ -16,17 +16,20 @@ the emulator's likelihood, sharp as the data make it, not by the guesses.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
 from slipwave.errors import SlipwaveError
-from slipwave.fit.search import ACQUISITION_BATCH, BEST_STARTS, sample_posterior, scaled
+from slipwave.fit.search import (
+    ACQUISITION_BATCH,
+    BEST_STARTS,
+    gaussian_process,
+    sample_posterior,
+    scaled,
+)
 
 
 @dataclass(frozen=True)
@@ -87,7 +90,7 @@ class FeatureEmulator:
 def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
             loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], seed: int
             ) -> FeatureEmulator:
-    """Fit one Gaussian process per feature (a constant times an anisotropic RBF, plus noise).
+    """Fit one Gaussian process per feature (:func:`~slipwave.fit.search.gaussian_process`).
 
     Parameters
     ----------
@@ -107,18 +110,10 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
     FeatureEmulator
         The processes.
     """
-    p = points.shape[1]
-    processes = []
-    for column in features.T:
-        kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(p, 0.3), (1e-2, 1e1))
-                  + WhiteKernel(1e-3, (1e-8, 1e0)))
-        process = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=2,
-                                           random_state=seed)
-        with warnings.catch_warnings():  # a length scale at its bound is an answer
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            process.fit(scaled(points, box), column)
-        processes.append(process)
-    return FeatureEmulator(tuple(processes), box, loglik_of)
+    # a nearly deterministic simulator: its noise may be far below the log-likelihood's
+    processes = tuple(gaussian_process(scaled(points, box), column, seed,
+                                       noise=(1e-3, (1e-8, 1e0))) for column in features.T)
+    return FeatureEmulator(processes, box, loglik_of)
 
 
 def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarray,

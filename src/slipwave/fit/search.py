@@ -286,15 +286,40 @@ def surrogate(points: np.ndarray, logliks: np.ndarray, box: np.ndarray, seed: in
 
     """
     top = float(logliks.max())
-    p = points.shape[1]
-    kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(p, 0.3), (1e-2, 1e1))
-              + WhiteKernel(1e-2, (1e-6, 1e1)))
+    return Surrogate(gaussian_process(scaled(points, box), np.log(top + 1.0 - logliks),
+                                      seed), top, box)
+
+
+def gaussian_process(inputs: np.ndarray, outputs: np.ndarray, seed: int, *,
+                     noise: tuple[float, tuple[float, float]] = (1e-2, (1e-6, 1e1))
+                     ) -> GaussianProcessRegressor:
+    """A Gaussian process fitted to outputs: a constant times an anisotropic RBF, plus noise.
+
+    Parameters
+    ----------
+    inputs
+        Shape (n, parameters), in the unit cube (:func:`scaled`).
+    outputs
+        Shape (n,), finite.
+    seed
+        The optimiser's restarts' seed.
+    noise
+        The white noise's first value and its bounds, in the outputs' normalised variance.
+
+    Returns
+    -------
+    sklearn.gaussian_process.GaussianProcessRegressor
+        Fitted (its outputs normalised).
+    """
+    kernel = (ConstantKernel(1.0, (1e-3, 1e3))
+              * RBF(np.full(inputs.shape[1], 0.3), (1e-2, 1e1))
+              + WhiteKernel(*noise))
     process = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=2,
                                        random_state=seed)
     with warnings.catch_warnings():  # a length scale at its bound is an answer, not a fault
         warnings.simplefilter("ignore", ConvergenceWarning)
-        process.fit(scaled(points, box), np.log(top + 1.0 - logliks))
-    return Surrogate(process, top, box)
+        process.fit(inputs, outputs)
+    return process
 
 
 MIN_STEPS = 300
