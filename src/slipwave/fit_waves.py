@@ -782,7 +782,6 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
     """
     say = progress or (lambda _: None)
     runs: list[Simulated | None] = []
-    guesses: list[np.ndarray] = []
     measured: list[MeshError] = []
     with (ProcessPoolExecutor(settings.processes) if settings.processes > 1
           else contextlib.nullcontext()) as pool:
@@ -796,8 +795,7 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
         def simulate(points: np.ndarray) -> np.ndarray:
             made = simulated(points, settings.elements)
             runs.extend(made)
-            guesses.extend(points)
-            if not measured:  # the design's: its best run again on twice the mesh
+            if not measured:  # the design's best run again on twice the mesh
                 first = np.array([loglik(test, run) for run in made])
                 if np.isfinite(first).any():
                     best = int(np.nanargmax(np.where(np.isfinite(first), first, np.nan)))
