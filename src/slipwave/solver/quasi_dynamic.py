@@ -545,10 +545,16 @@ def record_times(duration: float, rate: float) -> np.ndarray:
     --------
     >>> record_times(1.0, 4.0)
     array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+
+    An end a rounding short of a record is that record, at the duration itself (a
+    fit's run of 320.15999999999974 s filmed at 25 frames/s ends at it, not at 320.16):
+
+    >>> float(record_times(320.15999999999974, 25.0)[-1])
+    320.15999999999974
     """
     if not (duration > 0 and rate > 0):
         raise SlipwaveError(f"duration and rate must be > 0, got {duration}, {rate}")
-    return np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
+    return np.minimum(np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate, duration)
 
 
 class _Interpolant:
