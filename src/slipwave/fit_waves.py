@@ -497,17 +497,17 @@ def run_features(simulated: Simulated | None) -> np.ndarray:
     -------
     numpy.ndarray
         The mean of its windows' :data:`CARD_FEATURES`, its share of waves followed (of
-        one, where it had none) and the log median speed of those followed (at
-        :data:`FASTEST_FOLLOWED` where fewer than :data:`MIN_FOLLOWED`), as
-        :func:`loglik` reads them; NaN where it failed or has fewer than
-        :data:`MIN_WINDOWS` windows.
+        one, where it had none) and the log median speed of those followed (NaN where
+        fewer than :data:`MIN_FOLLOWED`: the emulator learns the speed from the runs
+        the camera followed, the share apart); all NaN where it failed or has fewer
+        than :data:`MIN_WINDOWS` windows.
 
     Examples
     --------
     >>> run = Simulated(np.array([[0.80, 0.10, 2.5], [0.82, 0.10, 2.7]]), 4, 1,
     ...                 np.array([200.0]))
     >>> run_features(run).round(3).tolist()
-    [0.81, 0.1, 2.6, 0.25, 6.908]
+    [0.81, 0.1, 2.6, 0.25, nan]
     """
     if simulated is None:
         return np.full(len(CARD_FEATURES) + len(WAVE_FEATURES), np.nan)
@@ -515,7 +515,7 @@ def run_features(simulated: Simulated | None) -> np.ndarray:
     if finite.shape[0] < MIN_WINDOWS:
         return np.full(len(CARD_FEATURES) + len(WAVE_FEATURES), np.nan)
     speed = (float(np.median(np.log(simulated.speeds)))
-             if simulated.followed >= MIN_FOLLOWED else float(np.log(FASTEST_FOLLOWED)))
+             if simulated.followed >= MIN_FOLLOWED else np.nan)
     return np.array([*finite.mean(axis=0), simulated.followed / max(simulated.waves, 1),
                      speed])
 

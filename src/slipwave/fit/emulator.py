@@ -97,7 +97,7 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
     points
         Shape (n, parameters).
     features
-        Shape (n, features), finite.
+        Shape (n, features); each feature's process learns from its finite values.
     box
         The box the inputs are scaled by.
     loglik_of
@@ -111,7 +111,8 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
         The processes.
     """
     # a nearly deterministic simulator: its noise may be far below the log-likelihood's
-    processes = tuple(gaussian_process(scaled(points, box), column, seed,
+    processes = tuple(gaussian_process(scaled(points[np.isfinite(column)], box),
+                                       column[np.isfinite(column)], seed,
                                        noise=(1e-3, (1e-8, 1e0))) for column in features.T)
     return FeatureEmulator(processes, box, loglik_of)
 
@@ -134,7 +135,8 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
     ----------
     simulate
         The features at guesses, shape (n, features) for (n, coordinates); a row of NaN
-        where the simulation failed.
+        where the simulation failed, a NaN where a run has no value of a feature (it is
+        learnt from the others).
     box
         The prior's box, one row (low, high) per coordinate.
     draw
@@ -192,14 +194,14 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
     features = np.asarray(simulate(points), dtype=float)
 
     def fitted(round_: int) -> FeatureEmulator:
-        finite = np.all(np.isfinite(features), axis=1)
+        finite = np.isfinite(features[:, 0])
         if finite.sum() < dimensions + 2:
             raise SlipwaveError(f"{finite.sum()} of {len(points)} guesses have features (the "
                                 "simulations failed): too few to emulate them")
         return emulate(points[finite], features[finite], box, loglik_of, seed + round_)
 
     def best(emulator: FeatureEmulator) -> np.ndarray:
-        finite = np.all(np.isfinite(features), axis=1)
+        finite = np.isfinite(features[:, 0])
         candidates = points[finite]
         return candidates[np.argsort(emulator.loglik(candidates))[-BEST_STARTS:]]
 
