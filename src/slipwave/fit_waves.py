@@ -103,6 +103,11 @@ MIN_WINDOWS = 2
 MIN_FOLLOWED = 2
 """Followed waves a median speed needs (fewer: the speed is not compared)."""
 
+ABSENT_FEATURES = np.array([np.nan] * len(CARD_FEATURES) + [np.nan, np.log(FASTEST_FOLLOWED)])
+"""What a run lacking a feature stands at where too few runs have it to emulate it
+(:data:`slipwave.fit.emulator.MIN_VALUES`): the speed, at the fastest the frames follow
+(as :func:`loglik` reads a run that followed fewer than :data:`MIN_FOLLOWED`)."""
+
 
 @dataclass(frozen=True)
 class FilmedTest:
@@ -819,7 +824,8 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             samples, points, _, _ = emulator_search(
                 simulate, PRIOR_BOX, _prior_draws, _inside, likelihood,
                 design=settings.design, refinements=settings.refinements,
-                samples=settings.samples, seed=settings.seed, progress=progress)
+                samples=settings.samples, seed=settings.seed, progress=progress,
+                absent=ABSENT_FEATURES)
         except SlipwaveError as err:
             raise SlipwaveError(f"test {test.setup.test_id!r}: {err}") from err
     error = carried()

@@ -87,9 +87,14 @@ class FeatureEmulator:
         return self.loglik_of(*self.predict(points))
 
 
+MIN_VALUES = 3
+"""Runs with a value of a feature that its process learns from, at least; with fewer, the
+runs lacking it take the feature's ``absent`` value."""
+
+
 def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
-            loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], seed: int
-            ) -> FeatureEmulator:
+            loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], seed: int,
+            absent: np.ndarray | None = None) -> FeatureEmulator:
     """Fit one Gaussian process per feature (:func:`~slipwave.fit.search.gaussian_process`).
 
     Parameters
@@ -104,17 +109,33 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
         As :attr:`FeatureEmulator.loglik_of`.
     seed
         The optimiser's restarts' seed.
+    absent
+        One per feature: the value a run lacking the feature takes where fewer than
+        :data:`MIN_VALUES` runs have it (NaN, the default: the feature is never lacked).
 
     Returns
     -------
     FeatureEmulator
         The processes.
+
+    Raises
+    ------
+    SlipwaveError
+        If a feature without an ``absent`` value has fewer than :data:`MIN_VALUES` values.
     """
-    # a nearly deterministic simulator: its noise may be far below the log-likelihood's
-    processes = tuple(gaussian_process(scaled(points[np.isfinite(column)], box),
-                                       column[np.isfinite(column)], seed,
-                                       noise=(1e-3, (1e-8, 1e0))) for column in features.T)
-    return FeatureEmulator(processes, box, loglik_of)
+    lacking = np.full(features.shape[1], np.nan) if absent is None else absent
+    processes = []
+    for index, column in enumerate(features.T):
+        if np.isfinite(column).sum() < MIN_VALUES:
+            column = np.where(np.isfinite(column), column, lacking[index])
+        known = np.isfinite(column)
+        if known.sum() < MIN_VALUES:
+            raise SlipwaveError(f"feature {index} has {known.sum()} values of "
+                                f"{len(column)} runs: too few to emulate it")
+        # a nearly deterministic simulator: its noise may be far below the likelihood's
+        processes.append(gaussian_process(scaled(points[known], box), column[known], seed,
+                                          noise=(1e-3, (1e-8, 1e0))))
+    return FeatureEmulator(tuple(processes), box, loglik_of)
 
 
 def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarray,
@@ -122,6 +143,7 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
                     inside: Callable[[np.ndarray], np.ndarray],
                     loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], *,
                     design: int, refinements: int, samples: int, seed: int,
+                    absent: np.ndarray | None = None,
                     progress: Callable[[str], None] | None = None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, FeatureEmulator]:
     """A posterior from an emulator of the features, its guesses drawn from its posterior.
@@ -151,6 +173,8 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
         Posterior samples kept.
     seed
         The search's seed.
+    absent
+        As :func:`emulate`'s.
     progress
         Called with a line after each batch.
 
@@ -198,7 +222,8 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
         if finite.sum() < dimensions + 2:
             raise SlipwaveError(f"{finite.sum()} of {len(points)} guesses have features (the "
                                 "simulations failed): too few to emulate them")
-        return emulate(points[finite], features[finite], box, loglik_of, seed + round_)
+        return emulate(points[finite], features[finite], box, loglik_of, seed + round_,
+                       absent)
 
     def best(emulator: FeatureEmulator) -> np.ndarray:
         finite = np.isfinite(features[:, 0])
