@@ -162,7 +162,7 @@ def test_fast_changes_are_unresolved_not_waves(tracked):
 
 @pytest.fixture(scope="module")
 def another_seed(tmp_path_factory) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
-    """The tall slab again, its camera noise drawn with another seed (5), 170 s long."""
+    """The tall slab again, its camera noise drawn with another seed (5), 130 s long."""
     import dataclasses
 
     import yaml
@@ -171,7 +171,7 @@ def another_seed(tmp_path_factory) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
 
     config = yaml.safe_load((BENCH / "campaign.yaml").read_text())
     spec = next(s for s in load_tests(config) if s.test_id == "hl075")
-    spec = dataclasses.replace(spec, duration=170.0)
+    spec = dataclasses.replace(spec, duration=130.0)
     folder = tmp_path_factory.mktemp("seed5")
     paths = write_test(simulate_test(spec, seed=5), folder)
     source = open_frames(paths["video"])
@@ -188,7 +188,7 @@ def test_another_seed(another_seed):
     truth = truth[truth["camera_visible"] & (truth["x_max"] - truth["x_min"] >= 20.0)]
     gap = np.abs(start[:, None] - truth["t_start"].to_numpy()[None, :])
     assert (gap.min(axis=0) <= MATCH).all() and (gap.min(axis=1) <= MATCH).all()
-    assert len(followed) == len(truth) >= 20
+    assert len(followed) == len(truth) >= 15
     paired = followed.iloc[gap.argmin(axis=0)]
     assert (paired["direction"].to_numpy() == truth["direction"].to_numpy()).all()
     error = np.abs((paired["x_max"] - paired["x_min"]).to_numpy()
