@@ -50,7 +50,7 @@ from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.fit.emulator import emulator_search
 from slipwave.fit.likelihood import shrunk_covariance
-from slipwave.fit.search import central_intervals
+from slipwave.fit.search import BEST_STARTS, central_intervals, sample_posterior
 from slipwave.fit.slider import rate_state_values
 from slipwave.setup import TestSetup
 from slipwave.simulate_waves import film_kymograph, on_test_clock
@@ -441,6 +441,36 @@ def mesh_error(coarse: Simulated | None, fine: Simulated | None) -> MeshError:
     return MeshError(card, speed)
 
 
+def root_mean_square(errors: list[MeshError]) -> MeshError:
+    """The mesh's error over several guesses: each feature's root mean square change.
+
+    The change varies over the prior (with D_c and b - a); each guess measures it at one
+    point.
+
+    Parameters
+    ----------
+    errors
+        The changes measured (:func:`mesh_error`).
+
+    Returns
+    -------
+    MeshError
+        Zero where none was measured.
+
+    Examples
+    --------
+    >>> errors = [MeshError(np.array([0.001, 0.006, 0.0]), 0.1),
+    ...           MeshError(np.array([0.001, 0.002, 0.0]), 0.5)]
+    >>> error = root_mean_square(errors)
+    >>> error.card.round(4).tolist(), round(error.speed, 3)
+    ([0.001, 0.0045, 0.0], 0.361)
+    """
+    if not errors:
+        return MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
+    return MeshError(np.sqrt(np.mean([error.card**2 for error in errors], axis=0)),
+                     float(np.sqrt(np.mean([error.speed**2 for error in errors]))))
+
+
 def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | None = None
            ) -> float:
     """The test's synthetic log-likelihood given a guess's run.
@@ -662,6 +692,10 @@ class WavesFitSettings:
         Points drawn from the emulator's posterior, per parameter.
     samples
         Posterior samples kept.
+    mesh_checks
+        Posterior draws run again at twice the mesh after the search; the mesh's error
+        carried by the posterior, sampled again, is then the root mean square of their
+        features' changes and the design's best guess's (0: that guess's alone).
     processes
         Worker processes for the guesses' runs.
     seed
@@ -671,9 +705,10 @@ class WavesFitSettings:
 
     elements: int = 80
     members: int = 4
-    design: int = 5
+    design: int = 8
     refinements: int = 6
     samples: int = 2000
+    mesh_checks: int = 4
     processes: int = 1
     seed: int = 0
 
@@ -764,7 +799,10 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
     likelihood given the emulated features (:func:`emulated_loglik`). After the design's
     runs, the best of them by :func:`loglik` is run again on twice the mesh, and the
     features' change (:func:`mesh_error`) is carried by every likelihood from then on, so
-    that an interval does not claim what the guesses' mesh cannot resolve.
+    that an interval does not claim what the guesses' mesh cannot resolve. That change
+    varies over the prior; after the search, :attr:`WavesFitSettings.mesh_checks`
+    posterior draws are run at both meshes, and the posterior is sampled again with the
+    root mean square of every change measured.
 
     Parameters
     ----------
@@ -813,7 +851,7 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             return np.array([run_features(run) for run in made])
 
         def carried() -> MeshError:
-            return measured[0] if measured else MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
+            return root_mean_square(measured)
 
         def likelihood(means: np.ndarray, variances: np.ndarray) -> np.ndarray:
             # the runs' scatter as made so far (the emulator is refitted after each batch)
@@ -821,13 +859,27 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             return rate(means, variances)
 
         try:
-            samples, points, _, _ = emulator_search(
+            samples, points, _, emulator = emulator_search(
                 simulate, PRIOR_BOX, _prior_draws, _inside, likelihood,
                 design=settings.design, refinements=settings.refinements,
                 samples=settings.samples, seed=settings.seed, progress=progress,
                 absent=ABSENT_FEATURES)
         except SlipwaveError as err:
             raise SlipwaveError(f"test {test.setup.test_id!r}: {err}") from err
+        if settings.mesh_checks:  # the mesh's error where the posterior is, then again
+            rng = np.random.default_rng(settings.seed)
+            checked = samples[rng.choice(len(samples), settings.mesh_checks, replace=False)]
+            coarse = simulated(checked, settings.elements)
+            fine = simulated(checked, 2 * settings.elements)
+            runs.extend(coarse)
+            points = np.vstack([points, checked])
+            measured.extend(mesh_error(c, f) for c, f in zip(coarse, fine, strict=True)
+                            if c is not None and f is not None)
+            say(f"mesh error over {len(measured)} guesses (root mean square): card "
+                f"{carried().card.round(4).tolist()}, log speed {carried().speed:.3f}")
+            starts = points[np.argsort(emulator.loglik(points))[-BEST_STARTS:]]
+            samples = sample_posterior(emulator, PRIOR_BOX, _inside, starts,
+                                       samples=settings.samples, seed=settings.seed)
     error = carried()
     logliks = np.array([loglik(test, run, error) for run in runs])
     return WavesPosterior(samples, points, logliks, error)
