@@ -129,7 +129,8 @@ def main() -> None:
             + f" ({test.windows} windows of {test.window:.1f} s, {test.followed}/{test.waves} "
             f"waves followed, median {np.median(test.speeds) if test.speeds else np.nan:.0f} "
             f"mm/s; mesh error card "
-            f"{error.card.round(4).tolist()}, log speed {error.speed:.3f}; made in "
+            f"{error.card.round(4).tolist()}, log speed {error.speed:.3f}, share "
+            f"{error.share:.2f}; made in "
             f"{seconds_made:.0f} s of CPU, fitted in {seconds:.0f} s on {processes} "
             f"processes, {len(posterior.points)} guesses; log-likelihood at the best guess "
             f"{np.nanmax(posterior.logliks):.1f}, at the truth {at_truth:.1f})", flush=True)

@@ -404,11 +404,15 @@ class MeshError:
     speed
         The log median speed's change (absolute; 0 where either run followed fewer than
         two waves).
+    share
+        The share of waves followed's change (absolute; a coarser mesh can turn a cycle
+        of fronts the camera follows into one of faster fronts).
 
     """
 
     card: np.ndarray
     speed: float
+    share: float = 0.0
 
 
 def mesh_error(coarse: Simulated | None, fine: Simulated | None) -> MeshError:
@@ -430,15 +434,16 @@ def mesh_error(coarse: Simulated | None, fine: Simulated | None) -> MeshError:
     ...                    np.array([200.0, 220.0]))
     >>> fine = Simulated(np.array([[0.82, 0.11, 2.5]]), 3, 3, np.array([240.0, 264.0]))
     >>> error = mesh_error(coarse, fine)
-    >>> error.card.round(3).tolist(), round(error.speed, 3)
-    ([0.01, 0.01, 0.0], 0.182)
+    >>> error.card.round(3).tolist(), round(error.speed, 3), error.share
+    ([0.01, 0.01, 0.0], 0.182, 0.0)
     """
     if coarse is None or fine is None:
         return MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
     card = np.abs(np.nanmean(fine.windows, axis=0) - np.nanmean(coarse.windows, axis=0))
     speed = (abs(float(np.median(np.log(fine.speeds)) - np.median(np.log(coarse.speeds))))
              if min(coarse.followed, fine.followed) >= MIN_FOLLOWED else 0.0)
-    return MeshError(card, speed)
+    share = abs(fine.followed / max(fine.waves, 1) - coarse.followed / max(coarse.waves, 1))
+    return MeshError(card, speed, share)
 
 
 def root_mean_square(errors: list[MeshError]) -> MeshError:
@@ -459,16 +464,17 @@ def root_mean_square(errors: list[MeshError]) -> MeshError:
 
     Examples
     --------
-    >>> errors = [MeshError(np.array([0.001, 0.006, 0.0]), 0.1),
-    ...           MeshError(np.array([0.001, 0.002, 0.0]), 0.5)]
+    >>> errors = [MeshError(np.array([0.001, 0.006, 0.0]), 0.1, 1.0),
+    ...           MeshError(np.array([0.001, 0.002, 0.0]), 0.5, 0.0)]
     >>> error = root_mean_square(errors)
-    >>> error.card.round(4).tolist(), round(error.speed, 3)
-    ([0.001, 0.0045, 0.0], 0.361)
+    >>> error.card.round(4).tolist(), round(error.speed, 3), round(error.share, 3)
+    ([0.001, 0.0045, 0.0], 0.361, 0.707)
     """
     if not errors:
         return MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
     return MeshError(np.sqrt(np.mean([error.card**2 for error in errors], axis=0)),
-                     float(np.sqrt(np.mean([error.speed**2 for error in errors]))))
+                     float(np.sqrt(np.mean([error.speed**2 for error in errors]))),
+                     float(np.sqrt(np.mean([error.share**2 for error in errors]))))
 
 
 def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | None = None
@@ -506,7 +512,8 @@ def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | Non
     # the share followed: a run without waves in its windows followed none of one
     waves, followed = max(simulated.waves, 1), simulated.followed
     pooled = (test.followed + followed) / (test.waves + waves)
-    variance = pooled * (1 - pooled) * (1 / test.waves + 1 / waves) + SHARE_FLOOR**2
+    variance = (pooled * (1 - pooled) * (1 / test.waves + 1 / waves) + SHARE_FLOOR**2
+                + mesh.share**2)
     difference = test.followed / test.waves - followed / waves
     total += -0.5 * (difference**2 / variance + np.log(2 * np.pi * variance))
     if test.followed >= MIN_FOLLOWED:
@@ -664,7 +671,7 @@ def emulated_loglik(test: FilmedTest, scatter: RunScatter, error: MeshError, mem
         share = np.clip(means[:, card], 0.0, 1.0)
         pooled = (test.followed + share * scatter.waves) / (test.waves + scatter.waves)
         variance = (pooled * (1 - pooled) * (1 / test.waves + 1 / scatter.waves)
-                    + SHARE_FLOOR**2 + variances[:, card])
+                    + SHARE_FLOOR**2 + error.share**2 + variances[:, card])
         total += gaussian(test.followed / test.waves - share, variance)
         if measured is not None:
             spread = scatter.speed if scatter.speed is not None else measured[1]
@@ -777,7 +784,7 @@ class WavesPosterior:
         -------
         dict
             ``parameters`` (:meth:`interval`), ``guesses``, ``best`` (the best guess),
-            ``mesh_error`` (``card`` by feature, ``speed``).
+            ``mesh_error`` (``card`` by feature, ``speed``, ``share``).
         """
         finite = np.isfinite(self.logliks)
         best = self.points[finite][int(np.argmax(self.logliks[finite]))]
@@ -787,7 +794,8 @@ class WavesPosterior:
                 "best": dict(zip(PARAMETERS, (float(v) for v in best), strict=True)),
                 "mesh_error": {"card": dict(zip(CARD_FEATURES, self.mesh_error.card.tolist(),
                                                 strict=True)),
-                               "speed": self.mesh_error.speed}}
+                               "speed": self.mesh_error.speed,
+                               "share": self.mesh_error.share}}
 
 
 def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
@@ -847,7 +855,7 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
                     say(f"mesh error at the design's best guess ({settings.elements} "
                         f"against {2 * settings.elements} elements): card "
                         f"{measured[0].card.round(4).tolist()}, log speed "
-                        f"{measured[0].speed:.3f}")
+                        f"{measured[0].speed:.3f}, share {measured[0].share:.2f}")
             return np.array([run_features(run) for run in made])
 
         def carried() -> MeshError:
@@ -876,7 +884,8 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             measured.extend(mesh_error(c, f) for c, f in zip(coarse, fine, strict=True)
                             if c is not None and f is not None)
             say(f"mesh error over {len(measured)} guesses (root mean square): card "
-                f"{carried().card.round(4).tolist()}, log speed {carried().speed:.3f}")
+                f"{carried().card.round(4).tolist()}, log speed {carried().speed:.3f}, "
+                f"share {carried().share:.2f}")
             starts = points[np.argsort(emulator.loglik(points))[-BEST_STARTS:]]
             samples = sample_posterior(emulator, PRIOR_BOX, _inside, starts,
                                        samples=settings.samples, seed=settings.seed)
