@@ -48,9 +48,9 @@ from slipwave.compare import MEDIAN_ERROR
 from slipwave.defaults import BAND_MM
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
-from slipwave.fit.emulator import emulator_search
+from slipwave.fit.emulator import emulated_posterior, emulator_search
 from slipwave.fit.likelihood import shrunk_covariance
-from slipwave.fit.search import BEST_STARTS, central_intervals, sample_posterior
+from slipwave.fit.search import central_intervals
 from slipwave.fit.slider import rate_state_values
 from slipwave.setup import TestSetup
 from slipwave.simulate_waves import film_kymograph, on_test_clock
@@ -881,14 +881,15 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             fine = simulated(checked, 2 * settings.elements)
             runs.extend(coarse)
             points = np.vstack([points, checked])
+            # a failed pair measures nothing (mesh_error's zeros would shrink the mean)
             measured.extend(mesh_error(c, f) for c, f in zip(coarse, fine, strict=True)
                             if c is not None and f is not None)
+            error = carried()
             say(f"mesh error over {len(measured)} guesses (root mean square): card "
-                f"{carried().card.round(4).tolist()}, log speed {carried().speed:.3f}, "
-                f"share {carried().share:.2f}")
-            starts = points[np.argsort(emulator.loglik(points))[-BEST_STARTS:]]
-            samples = sample_posterior(emulator, PRIOR_BOX, _inside, starts,
-                                       samples=settings.samples, seed=settings.seed)
+                f"{error.card.round(4).tolist()}, log speed {error.speed:.3f}, "
+                f"share {error.share:.2f}")
+            samples = emulated_posterior(emulator, points, _inside,
+                                         samples=settings.samples, seed=settings.seed)
     error = carried()
     logliks = np.array([loglik(test, run, error) for run in runs])
     return WavesPosterior(samples, points, logliks, error)

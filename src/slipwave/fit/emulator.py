@@ -138,6 +138,34 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
     return FeatureEmulator(tuple(processes), box, loglik_of)
 
 
+def emulated_posterior(emulator: FeatureEmulator, points: np.ndarray,
+                       inside: Callable[[np.ndarray], np.ndarray], *, samples: int,
+                       seed: int) -> np.ndarray:
+    """Samples of prior x exp(emulated log-likelihood) over the emulator's box (emcee).
+
+    Parameters
+    ----------
+    emulator
+        The emulator.
+    points
+        Guesses made: the walkers start around the best of them by the emulator.
+    inside
+        Whether points lie in the prior.
+    samples
+        Samples kept.
+    seed
+        The sampler's seed.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (samples, parameters).
+    """
+    starts = points[np.argsort(emulator.loglik(points))[-BEST_STARTS:]]
+    return sample_posterior(emulator, emulator.box, inside, starts, samples=samples,
+                            seed=seed)
+
+
 def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarray,
                     draw: Callable[[int, np.random.Generator | int], np.ndarray],
                     inside: Callable[[np.ndarray], np.ndarray],
@@ -225,22 +253,19 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
         return emulate(points[finite], features[finite], box, loglik_of, seed + round_,
                        absent)
 
-    def best(emulator: FeatureEmulator) -> np.ndarray:
-        finite = np.isfinite(features[:, 0])
-        candidates = points[finite]
-        return candidates[np.argsort(emulator.loglik(candidates))[-BEST_STARTS:]]
+    def made() -> np.ndarray:
+        return points[np.isfinite(features[:, 0])]
 
     say(f"design: {len(points)} guesses")
     for round_ in range(0, refinements * dimensions, ACQUISITION_BATCH):
         emulator = fitted(round_)
-        draws = sample_posterior(emulator, box, inside, best(emulator), samples=200,
-                                 seed=int(rng.integers(2**31)))
+        draws = emulated_posterior(emulator, made(), inside, samples=200,
+                                   seed=int(rng.integers(2**31)))
         chosen = draws[rng.choice(draws.shape[0], ACQUISITION_BATCH, replace=False)]
         points = np.vstack([points, chosen])
         features = np.vstack([features, np.asarray(simulate(chosen), dtype=float)])
         say(f"refinements: {len(points)} guesses, the emulator's best log-likelihood "
             f"{float(np.max(emulator.loglik(points))):.1f}")
     emulator = fitted(refinements * dimensions)
-    drawn = sample_posterior(emulator, box, inside, best(emulator), samples=samples,
-                             seed=seed)
+    drawn = emulated_posterior(emulator, made(), inside, samples=samples, seed=seed)
     return drawn, points, features, emulator
