@@ -11,8 +11,9 @@ windows of :data:`WINDOW_RECURRENCES` of its slips' median recurrence; each wind
 slips (:func:`slipwave.events.detect_events`, the detect stage's settings) give
 :data:`CARD_FEATURES`: the median T/|N| before a slip, the median T/|N| drop, the log of
 the window's length per slip. The video's waves over the same span give
-:data:`WAVE_FEATURES`: the share the camera could follow and the log of the followed
-waves' median speed.
+:data:`WAVE_FEATURES`: the log of the followed waves' median speed. (The share of waves
+the camera could follow is not one: it steps between none and all across the prior,
+which no smooth emulator reads, and moves with the mesh.)
 
 **The likelihood at a guess.** One quasi-dynamic run of the test's slab, normal load and
 drive, long enough for the settling window and :attr:`WavesFitSettings.members` windows
@@ -21,10 +22,9 @@ films (:func:`slipwave.simulate_waves.film_kymograph`), its waves tracked as the
 (:func:`slipwave.video.track_waves`); its windows are cut as the test's. The card
 features' mean has the Gaussian synthetic log-likelihood of the spring-slider fit (the
 windows' shrunk covariance times (1/n + 1/K), plus the test's own windows' variance over
-n and :data:`CARD_FLOOR` squared); the wave features add independent Gaussian terms:
-the share by its pooled binomial variance, the log median speed by its two standard
-errors (:data:`slipwave.compare.MEDIAN_ERROR`), each with its floor. Leaving out the
-card and wave features' correlation is this likelihood's approximation.
+n and :data:`CARD_FLOOR` squared); the log median speed adds an independent Gaussian
+term by its two standard errors (:data:`slipwave.compare.MEDIAN_ERROR`) and its floor.
+Leaving out the card and wave features' correlation is this likelihood's approximation.
 
 What it leaves out: the nuisances of the quasi-static fit's ensemble (the load cells'
 calibration, the machine's spring: the quasi-dynamic run prescribes the flat's travel),
@@ -74,9 +74,8 @@ CARD_FEATURES = ("peak", "drop", "recurrence")
 """A window's card features: median T/|N| before a slip, median T/|N| drop, log of the
 window's length per slip (s)."""
 
-WAVE_FEATURES = ("followed", "speed")
-"""The video's features: the share of waves the camera could follow, the log of the
-followed waves' median speed (mm/s)."""
+WAVE_FEATURES = ("speed",)
+"""The video's feature: the log of the followed waves' median speed (mm/s)."""
 
 WINDOW_RECURRENCES = 3.0
 """A window's length, in the test's median recurrences: three slips or so a window."""
@@ -84,9 +83,6 @@ WINDOW_RECURRENCES = 3.0
 CARD_FLOOR = np.array([0.003, 0.003, 0.05])
 """The smallest standard error of each card feature's window mean: the card's T/|N| over
 a peak (its noise, 0.003) and a twentieth of a recurrence."""
-
-SHARE_FLOOR = 0.05
-"""The smallest standard error of the share followed (a wave tracked or not by a frame)."""
 
 SPEED_FLOOR = 0.1
 """The smallest standard error of the log median speed: a tenth, the scatter between the
@@ -103,7 +99,7 @@ MIN_WINDOWS = 2
 MIN_FOLLOWED = 2
 """Followed waves a median speed needs (fewer: the speed is not compared)."""
 
-ABSENT_FEATURES = np.array([np.nan] * len(CARD_FEATURES) + [np.nan, np.log(FASTEST_FOLLOWED)])
+ABSENT_FEATURES = np.array([np.nan] * len(CARD_FEATURES) + [np.log(FASTEST_FOLLOWED)])
 """What a run lacking a feature stands at where too few runs have it to emulate it
 (:data:`slipwave.fit.emulator.MIN_VALUES`): the speed, at the fastest the frames follow
 (as :func:`loglik` reads a run that followed fewer than :data:`MIN_FOLLOWED`)."""
@@ -404,15 +400,11 @@ class MeshError:
     speed
         The log median speed's change (absolute; 0 where either run followed fewer than
         two waves).
-    share
-        The share of waves followed's change (absolute; a coarser mesh can turn a cycle
-        of fronts the camera follows into one of faster fronts).
 
     """
 
     card: np.ndarray
     speed: float
-    share: float = 0.0
 
 
 def mesh_error(coarse: Simulated | None, fine: Simulated | None) -> MeshError:
@@ -434,16 +426,15 @@ def mesh_error(coarse: Simulated | None, fine: Simulated | None) -> MeshError:
     ...                    np.array([200.0, 220.0]))
     >>> fine = Simulated(np.array([[0.82, 0.11, 2.5]]), 3, 3, np.array([240.0, 264.0]))
     >>> error = mesh_error(coarse, fine)
-    >>> error.card.round(3).tolist(), round(error.speed, 3), error.share
-    ([0.01, 0.01, 0.0], 0.182, 0.0)
+    >>> error.card.round(3).tolist(), round(error.speed, 3)
+    ([0.01, 0.01, 0.0], 0.182)
     """
     if coarse is None or fine is None:
         return MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
     card = np.abs(np.nanmean(fine.windows, axis=0) - np.nanmean(coarse.windows, axis=0))
     speed = (abs(float(np.median(np.log(fine.speeds)) - np.median(np.log(coarse.speeds))))
              if min(coarse.followed, fine.followed) >= MIN_FOLLOWED else 0.0)
-    share = abs(fine.followed / max(fine.waves, 1) - coarse.followed / max(coarse.waves, 1))
-    return MeshError(card, speed, share)
+    return MeshError(card, speed)
 
 
 def root_mean_square(errors: list[MeshError]) -> MeshError:
@@ -464,17 +455,16 @@ def root_mean_square(errors: list[MeshError]) -> MeshError:
 
     Examples
     --------
-    >>> errors = [MeshError(np.array([0.001, 0.006, 0.0]), 0.1, 1.0),
-    ...           MeshError(np.array([0.001, 0.002, 0.0]), 0.5, 0.0)]
+    >>> errors = [MeshError(np.array([0.001, 0.006, 0.0]), 0.1),
+    ...           MeshError(np.array([0.001, 0.002, 0.0]), 0.5)]
     >>> error = root_mean_square(errors)
-    >>> error.card.round(4).tolist(), round(error.speed, 3), round(error.share, 3)
-    ([0.001, 0.0045, 0.0], 0.361, 0.707)
+    >>> error.card.round(4).tolist(), round(error.speed, 3)
+    ([0.001, 0.0045, 0.0], 0.361)
     """
     if not errors:
         return MeshError(np.zeros(len(CARD_FEATURES)), 0.0)
     return MeshError(np.sqrt(np.mean([error.card**2 for error in errors], axis=0)),
-                     float(np.sqrt(np.mean([error.speed**2 for error in errors]))),
-                     float(np.sqrt(np.mean([error.share**2 for error in errors]))))
+                     float(np.sqrt(np.mean([error.speed**2 for error in errors]))))
 
 
 def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | None = None
@@ -509,13 +499,6 @@ def loglik(test: FilmedTest, simulated: Simulated | None, error: MeshError | Non
                           + mesh.card**2)
     total = float(multivariate_normal.logpdf(np.asarray(test.observed),
                                              mean=finite.mean(axis=0), cov=covariance))
-    # the share followed: a run without waves in its windows followed none of one
-    waves, followed = max(simulated.waves, 1), simulated.followed
-    pooled = (test.followed + followed) / (test.waves + waves)
-    variance = (pooled * (1 - pooled) * (1 / test.waves + 1 / waves) + SHARE_FLOOR**2
-                + mesh.share**2)
-    difference = test.followed / test.waves - followed / waves
-    total += -0.5 * (difference**2 / variance + np.log(2 * np.pi * variance))
     if test.followed >= MIN_FOLLOWED:
         measured, measured_error = _median_and_error(np.asarray(test.speeds))
         if simulated.followed >= MIN_FOLLOWED:
@@ -538,18 +521,17 @@ def run_features(simulated: Simulated | None) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        The mean of its windows' :data:`CARD_FEATURES`, its share of waves followed (of
-        one, where it had none) and the log median speed of those followed (NaN where
-        fewer than :data:`MIN_FOLLOWED`: the emulator learns the speed from the runs
-        the camera followed, the share apart); all NaN where it failed or has fewer
-        than :data:`MIN_WINDOWS` windows.
+        The mean of its windows' :data:`CARD_FEATURES` and the log median speed of the
+        waves the camera followed (NaN where fewer than :data:`MIN_FOLLOWED`: the
+        emulator learns the speed from the runs the camera followed); all NaN where it
+        failed or has fewer than :data:`MIN_WINDOWS` windows.
 
     Examples
     --------
     >>> run = Simulated(np.array([[0.80, 0.10, 2.5], [0.82, 0.10, 2.7]]), 4, 1,
     ...                 np.array([200.0]))
     >>> run_features(run).round(3).tolist()
-    [0.81, 0.1, 2.6, 0.25, nan]
+    [0.81, 0.1, 2.6, nan]
     """
     if simulated is None:
         return np.full(len(CARD_FEATURES) + len(WAVE_FEATURES), np.nan)
@@ -558,8 +540,7 @@ def run_features(simulated: Simulated | None) -> np.ndarray:
         return np.full(len(CARD_FEATURES) + len(WAVE_FEATURES), np.nan)
     speed = (float(np.median(np.log(simulated.speeds)))
              if simulated.followed >= MIN_FOLLOWED else np.nan)
-    return np.array([*finite.mean(axis=0), simulated.followed / max(simulated.waves, 1),
-                     speed])
+    return np.array([*finite.mean(axis=0), speed])
 
 
 @dataclass(frozen=True)
@@ -573,8 +554,6 @@ class RunScatter:
     ----------
     card
         The variance of a window's card features (the median over the runs).
-    waves
-        Waves per run (the median, at least one).
     speed
         The standard error of a run's log median speed (the median over the runs
         with :data:`MIN_FOLLOWED` followed waves; None where none had).
@@ -582,7 +561,6 @@ class RunScatter:
     """
 
     card: np.ndarray
-    waves: float
     speed: float | None
 
     @classmethod
@@ -604,8 +582,8 @@ class RunScatter:
         >>> run = Simulated(np.array([[0.80, 0.10, 2.5], [0.82, 0.10, 2.7]]), 4, 2,
         ...                 np.array([200.0, 220.0]))
         >>> scatter = RunScatter.of([run, None])
-        >>> scatter.card.round(4).tolist(), scatter.waves
-        ([0.0002, 0.0, 0.02], 4.0)
+        >>> scatter.card.round(4).tolist(), round(scatter.speed, 3)
+        ([0.0002, 0.0, 0.02], 0.031)
         """
         made = [run for run in runs if run is not None
                 and np.all(np.isfinite(run.windows), axis=1).sum() >= MIN_WINDOWS]
@@ -613,8 +591,7 @@ class RunScatter:
                                  axis=0, ddof=1) for run in made], axis=0)
         speeds = [_median_and_error(run.speeds)[1] for run in made
                   if run.followed >= MIN_FOLLOWED]
-        return cls(card, max(float(np.median([run.waves for run in made])), 1.0),
-                   float(np.median(speeds)) if speeds else None)
+        return cls(card, float(np.median(speeds)) if speeds else None)
 
 
 def emulated_loglik(test: FilmedTest, scatter: RunScatter, error: MeshError, members: int
@@ -639,7 +616,7 @@ def emulated_loglik(test: FilmedTest, scatter: RunScatter, error: MeshError, mem
     Returns
     -------
     callable
-        ``(means, variances) -> log-likelihoods``, each argument of shape (n, 5).
+        ``(means, variances) -> log-likelihoods``, each argument of shape (n, 4).
 
     Examples
     --------
@@ -647,11 +624,11 @@ def emulated_loglik(test: FilmedTest, scatter: RunScatter, error: MeshError, mem
     >>> test = FilmedTest(TestSetup("t", {}, "frame"), 25.0, (0.5, 3.0), 60.0, 60.0,
     ...                   (0.80, 0.10, 2.5), (0.001, 0.001, 0.0), 3, 6, 6,
     ...                   (200.0, 210.0, 190.0, 205.0, 200.0, 195.0))
-    >>> scatter = RunScatter(np.array([1e-6, 1e-6, 0.0]), 6.0, 0.02)
+    >>> scatter = RunScatter(np.array([1e-6, 1e-6, 0.0]), 0.02)
     >>> rate = emulated_loglik(test, scatter, MeshError(np.zeros(3), 0.0), 4)
-    >>> near = np.array([[0.80, 0.10, 2.5, 1.0, np.log(200.0)]])
-    >>> off = near + [0.01, 0.0, 0.0, 0.0, 0.0]
-    >>> bool(rate(near, np.zeros((1, 5)))[0] - rate(off, np.zeros((1, 5)))[0] > 3)
+    >>> near = np.array([[0.80, 0.10, 2.5, np.log(200.0)]])
+    >>> off = near + [0.01, 0.0, 0.0, 0.0]
+    >>> bool(rate(near, np.zeros((1, 4)))[0] - rate(off, np.zeros((1, 4)))[0] > 3)
     True
     """
     card_variance = (scatter.card * (1.0 / test.windows + 1.0 / members)
@@ -668,16 +645,11 @@ def emulated_loglik(test: FilmedTest, scatter: RunScatter, error: MeshError, mem
         card = len(CARD_FEATURES)
         total = gaussian(means[:, :card] - observed, card_variance + variances[:, :card]
                          ).sum(axis=1)
-        share = np.clip(means[:, card], 0.0, 1.0)
-        pooled = (test.followed + share * scatter.waves) / (test.waves + scatter.waves)
-        variance = (pooled * (1 - pooled) * (1 / test.waves + 1 / scatter.waves)
-                    + SHARE_FLOOR**2 + error.share**2 + variances[:, card])
-        total += gaussian(test.followed / test.waves - share, variance)
         if measured is not None:
             spread = scatter.speed if scatter.speed is not None else measured[1]
             variance = (measured[1] ** 2 + spread**2 + SPEED_FLOOR**2 + error.speed**2
-                        + variances[:, card + 1])
-            total += gaussian(measured[0] - means[:, card + 1], variance)
+                        + variances[:, card])
+            total += gaussian(measured[0] - means[:, card], variance)
         return total
 
     return rate
@@ -784,7 +756,7 @@ class WavesPosterior:
         -------
         dict
             ``parameters`` (:meth:`interval`), ``guesses``, ``best`` (the best guess),
-            ``mesh_error`` (``card`` by feature, ``speed``, ``share``).
+            ``mesh_error`` (``card`` by feature, ``speed``).
         """
         finite = np.isfinite(self.logliks)
         best = self.points[finite][int(np.argmax(self.logliks[finite]))]
@@ -794,8 +766,7 @@ class WavesPosterior:
                 "best": dict(zip(PARAMETERS, (float(v) for v in best), strict=True)),
                 "mesh_error": {"card": dict(zip(CARD_FEATURES, self.mesh_error.card.tolist(),
                                                 strict=True)),
-                               "speed": self.mesh_error.speed,
-                               "share": self.mesh_error.share}}
+                               "speed": self.mesh_error.speed}}
 
 
 def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
@@ -855,7 +826,7 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
                     say(f"mesh error at the design's best guess ({settings.elements} "
                         f"against {2 * settings.elements} elements): card "
                         f"{measured[0].card.round(4).tolist()}, log speed "
-                        f"{measured[0].speed:.3f}, share {measured[0].share:.2f}")
+                        f"{measured[0].speed:.3f}")
             return np.array([run_features(run) for run in made])
 
         def carried() -> MeshError:
@@ -886,8 +857,7 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
                             if c is not None and f is not None)
             error = carried()
             say(f"mesh error over {len(measured)} guesses (root mean square): card "
-                f"{error.card.round(4).tolist()}, log speed {error.speed:.3f}, "
-                f"share {error.share:.2f}")
+                f"{error.card.round(4).tolist()}, log speed {error.speed:.3f}")
             samples = emulated_posterior(emulator, points, _inside,
                                          samples=settings.samples, seed=settings.seed)
     error = carried()
