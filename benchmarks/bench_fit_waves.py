@@ -11,7 +11,7 @@ no test is fitted with the model and mesh that made it.
 Targets: each true a, b, D_c inside its 95 % interval in at least 90 % of the tests
 (issue 37's acceptance); the fit's time is reported.
 
-Run: make bench  (or python benchmarks/bench_fit_waves.py [tests] [processes])
+Run: make bench  (or python benchmarks/bench_fit_waves.py [tests] [processes] [seed])
 """
 
 from __future__ import annotations
@@ -65,15 +65,15 @@ def draw_laws(rng: np.random.Generator, count: int) -> list[dict[str, float]]:
     return laws
 
 
-def made_test(job: tuple[int, dict[str, float]]) -> tuple[BenchTest, xr.Dataset,
-                                                           pd.DataFrame, float]:
+def made_test(job: tuple[int, dict[str, float], int]) -> tuple[BenchTest, xr.Dataset,
+                                                                pd.DataFrame, float]:
     """A law's virtual test: its spec, card recording, video's waves and CPU time."""
-    k, law = job
+    k, law, seed = job  # the law's index, the law, the draws' seed
     spec = BenchTest(f"qd{k}", elements=TRUTH_ELEMENTS, duration=DURATION, rate_state=law,
                      video="ffv1")
     start = time.process_time()
     with tempfile.TemporaryDirectory() as folder:
-        paths = write_test(simulate_test(spec, seed=SEED + k), Path(folder))
+        paths = write_test(simulate_test(spec, seed=seed + k), Path(folder))
         video = paths["video"]
         waves = track_waves(kymograph(open_frames(video),
                                       find_geometry(open_frames(video), spec.length)))
@@ -85,12 +85,13 @@ def made_test(job: tuple[int, dict[str, float]]) -> tuple[BenchTest, xr.Dataset,
 def main() -> None:
     tests = int(sys.argv[1]) if len(sys.argv) > 1 else TESTS
     processes = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-    print(f"rate-and-state fits of quasi-dynamic tests: load average {os.getloadavg()[0]:.2f} "
-          "before")
+    seed = int(sys.argv[3]) if len(sys.argv) > 3 else SEED
+    print(f"rate-and-state fits of quasi-dynamic tests (seed {seed}): load average "
+          f"{os.getloadavg()[0]:.2f} before")
     settings = WavesFitSettings(elements=FIT_ELEMENTS, processes=processes)
-    laws = draw_laws(np.random.default_rng(SEED), tests)
+    laws = draw_laws(np.random.default_rng(seed), tests)
     with ProcessPoolExecutor(processes) as pool:  # the tests made side by side first
-        made = list(pool.map(made_test, enumerate(laws)))
+        made = list(pool.map(made_test, [(k, law, seed) for k, law in enumerate(laws)]))
     rows = []
     for law, (spec, recording, waves, seconds_made) in zip(laws, made, strict=True):
         try:
