@@ -15,6 +15,7 @@ from slipwave.slider_campaign import read_slider_campaign, slider_fit_options, s
 from slipwave.campaign import (
     cache_option,
     check_campaign,
+    check_stages,
     check_config_files,
     column_pairs,
     edge_convention,
@@ -80,6 +81,7 @@ else:
     campaign = read_campaign(config["tests"])
     # each row against the table's schema, errors naming the table's line
     check_campaign(config, campaign, load_schema("tests"))
+    check_stages(config)
 
     TEST_IDS = list(campaign["test_id"])
     FILMED_IDS = [test_id for test_id in TEST_IDS if campaign.loc[test_id, "frames"]]
@@ -110,6 +112,7 @@ else:
     include: "workflow/rules/fits.smk"
     include: "workflow/rules/simulate.smk"
     include: "workflow/rules/simulate_waves.smk"
+    include: "workflow/rules/fit_waves.smk"
     include: "workflow/rules/compare.smk"
 
 

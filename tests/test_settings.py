@@ -137,6 +137,38 @@ def test_without_quasi_dynamic_runs_compare_takes_no_simulated_waves(snakemake_c
     assert len(on["simulate_waves"]) == len(filmed)
 
 
+FIT_WAVES_ON = "fit_waves:\n  enabled: true\n"
+# each fit_waves key at another value than its default, and the option it becomes
+FIT_WAVES_CHANGED = {"elements": (60, "--elements 60"), "members": (3, "--members 3"),
+                     "design": (5, "--design 5"), "refinements": (2, "--refinements 2"),
+                     "samples": (500, "--samples 500"), "mesh_checks": (1, "--mesh-checks 1"),
+                     "seed": (7, "--seed 7")}
+
+
+def test_the_rate_and_state_fit_runs_the_filmed_tests_under_their_fitted_law(
+        snakemake_cli, workdir, default_commands):
+    on = commands(snakemake_cli, workdir, FIT_WAVES_ON)
+    assert "fit_waves" not in default_commands
+    filmed = [line for line in default_commands["compare"] if "--waves" in line]
+    assert len(on["fit_waves"]) == len(filmed) == len(on["simulate_waves"])
+    # each test's run takes its own fit's law, in place of the config's; its page shows it
+    for line in on["simulate_waves"]:
+        test_id = re.search(r"results/(\w+)/fit\.json", line).group(1)
+        assert f"--law-fit results/{test_id}/fit_waves.json" in line and "--dc-um" not in line
+    assert sum("--waves-fit" in line for line in on["report"]) == len(filmed)
+    changed = {name for name in on if on[name] != default_commands.get(name)}
+    assert changed == {"fit_waves", "simulate_waves", "report"}
+    # the fit detects slips as every other stage does
+    detecting = commands(snakemake_cli, workdir, FIT_WAVES_ON + "detection:\n  threshold: 10\n")
+    assert all("--threshold 10" in line for line in detecting["fit_waves"])
+    # each of its settings reaches it alone, as the option of its name
+    settings = "".join(f"  {key}: {value}\n" for key, (value, _) in FIT_WAVES_CHANGED.items())
+    tuned = commands(snakemake_cli, workdir, FIT_WAVES_ON + settings)
+    assert {name for name in tuned if tuned[name] != on[name]} == {"fit_waves"}
+    for _, option in FIT_WAVES_CHANGED.values():
+        assert all(option in line for line in tuned["fit_waves"])
+
+
 def test_without_fits_the_gross_edge_ratio_reaches_detection_alone(snakemake_cli, workdir):
     unfitted = "fit:\n  enabled: false\n"
     before = commands(snakemake_cli, workdir, unfitted)
@@ -150,24 +182,29 @@ def test_every_schema_setting_is_tried():
 
     schema = load_schema("config")["properties"]
     tried = {(s, k) for s, k, _, _ in REACHES}
+    tried |= {("fit_waves", key) for key in FIT_WAVES_CHANGED}
     untried = {("map", "height_ratios"), ("map", "row_jobs"), ("map", "shard_size"),
-               ("fit", "enabled"), ("simulate_waves", "enabled")}  # jobs
-    for section in ("detection", "video", "fit", "simulate_waves", "map"):
+               ("fit", "enabled"), ("simulate_waves", "enabled"),
+               ("fit_waves", "enabled")}  # jobs
+    for section in ("detection", "video", "fit", "simulate_waves", "fit_waves", "map"):
         for key in schema[section]["properties"]:
             assert (section, key) in tried | untried, f"{section}.{key} is not tried"
 
 
-@pytest.mark.parametrize("command", ["detect", "fit", "simulate", "compare"])
+@pytest.mark.parametrize("command", ["detect", "fit", "simulate", "compare", "fit-waves"])
 def test_every_detecting_command_takes_the_detection_settings(command, tmp_path,
                                                                monkeypatch):
     monkeypatch.chdir(tmp_path)  # the inputs the options name must exist
-    for name in ("r.nc", "e.nc", "s.nc", "fit.json"):
+    for name in ("r.nc", "e.nc", "s.nc", "fit.json", "w.csv", "k.nc"):
         (tmp_path / name).write_text("")
     arguments = {"detect": ["detect", "r.nc", "-o", "e.csv"],
                  "fit": ["fit", "r.nc", "-o", "fit.json"],
                  "simulate": ["simulate", "--fit", "fit.json", "-o", "s.nc"],
                  "compare": ["compare", "e.nc", "--simulated", "s.nc", "--fit", "fit.json",
-                             "-o", "c.csv"]}[command]
+                             "-o", "c.csv"],
+                 "fit-waves": ["fit-waves", "--fit", "fit.json", "--recording", "r.nc",
+                               "--waves", "w.csv", "--kymograph", "k.nc", "-o", "f.json"]
+                 }[command]
     args = build_parser().parse_args([*arguments, "--threshold", "11", "--max-spike", "4",
                                       "--max-duration", "6", "--min-fall-rate", "1.7",
                                       "--edge-convention", "outward"])

@@ -251,6 +251,40 @@ def edge_convention(config: Mapping[str, Any], test: Mapping[str, str] | pd.Seri
     return str(test.get("edge_convention") or config["detection"]["edge_convention"])
 
 
+STAGES_READ: dict[str, tuple[str, ...]] = {"fit_waves": ("fit", "simulate_waves")}
+"""A stage's config section -> the sections of the stages whose products it reads."""
+
+
+def check_stages(config: Mapping[str, Any]) -> None:
+    """Refuse a stage enabled without a stage it reads.
+
+    Parameters
+    ----------
+    config
+        The validated workflow config.
+
+    Raises
+    ------
+    ConfigError
+        Naming the setting and the stages it needs.
+
+    Examples
+    --------
+    >>> check_stages({"fit": {"enabled": False}, "simulate_waves": {"enabled": True},
+    ...               "fit_waves": {"enabled": True}})
+    Traceback (most recent call last):
+    ...
+    slipwave.errors.ConfigError: fit_waves.enabled: true needs fit.enabled ...
+    """
+    for stage, needed in STAGES_READ.items():
+        if not config[stage]["enabled"]:
+            continue
+        for other in needed:
+            if not config[other]["enabled"]:
+                raise ConfigError(f"{stage}.enabled: true needs {other}.enabled (its products "
+                                  f"are read); set it true or {stage}.enabled false")
+
+
 def check_campaign(config: Mapping[str, Any], campaign: pd.DataFrame,
                    schema: Mapping[str, Any] | None = None) -> None:
     """Check each test of the campaign: its cells, its column map and its settings.

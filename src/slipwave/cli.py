@@ -394,6 +394,7 @@ def _waves(args: argparse.Namespace) -> None:
 def _report(args: argparse.Namespace) -> None:
     from slipwave.compare import read_comparison
     from slipwave.fit import read_fit
+    from slipwave.fit_waves import read_waves_fit
     from slipwave.identity import check_same_test
     from slipwave.io import read_dataset, read_table
     from slipwave.report import pairing_summary, video_summary, write_test_page
@@ -414,6 +415,9 @@ def _report(args: argparse.Namespace) -> None:
     if any(given) and not all(given):
         raise SlipwaveError("--quasi-dynamic, --simulated-waves, --simulated-fronts and "
                             "--simulated-film go together")
+    if args.waves_fit is not None and quasi_dynamic is None:
+        raise SlipwaveError("--waves-fit needs the run under its law (--quasi-dynamic)")
+    waves_fit = None if args.waves_fit is None else read_waves_fit(args.waves_fit)
     compared = {} if args.comparison_json is None else read_comparison(args.comparison_json)
     tables = {option: None if path is None else read_table(path) for option, path in [
         ("waves", args.waves), ("fused", args.fused), ("comparison", args.comparison),
@@ -427,7 +431,7 @@ def _report(args: argparse.Namespace) -> None:
             (args.contact, None if contact is None else contact.attrs),
             (args.quasi_dynamic, None if quasi_dynamic is None else quasi_dynamic.attrs),
             (args.simulated_film, None if simulated_film is None else simulated_film.attrs),
-            (args.comparison_json, compared or None),
+            (args.comparison_json, compared or None), (args.waves_fit, waves_fit),
             *[(getattr(args, option), None if table is None else table.attrs)
               for option, table in tables.items()]] if content is not None])
     video = None
@@ -439,7 +443,7 @@ def _report(args: argparse.Namespace) -> None:
         clock = read_clock(args.clock)
         video = video_summary(kymo, tables["waves"], clock, args.frames, events,
                               tables["fused"], quasi_dynamic, tables["simulated_waves"],
-                              tables["simulated_fronts"], simulated_film)
+                              tables["simulated_fronts"], simulated_film, waves_fit)
     pairing = None
     if fit is not None or simulated is not None:
         behaviour_map = None if args.map is None else read_dataset(args.map, "behaviour map")
@@ -598,30 +602,47 @@ def _simulate_test(args: argparse.Namespace) -> None:
           f"{replay.recording.attrs['gross_edge_ratio']:.3g}")
 
 
-def _simulate_waves(args: argparse.Namespace) -> None:
+def _video_frames(path: Path, fit: Mapping[str, Any]) -> tuple[float, tuple[float, float]]:
+    """A test's video's frame rate and band above the interface, from its kymograph."""
     import numpy as np
 
+    from slipwave.identity import check_same_test
+    from slipwave.io import read_dataset
+
+    video = read_dataset(path, "kymograph")
+    if video.attrs.get("test_id"):
+        check_same_test([("the fit", fit), (path, video.attrs)], keys=("test_id",))
+    times = video["time"].values
+    if times.size < 2:
+        raise SlipwaveError(f"{path}: fewer than two frames, no frame rate")
+    low, high = (float(value) for value in video.attrs["band_mm"])
+    return 1.0 / float(np.median(np.diff(times))), (low, high)
+
+
+def _simulate_waves(args: argparse.Namespace) -> None:
     from slipwave.fit import read_fit
+    from slipwave.fit_waves import read_waves_fit
     from slipwave.identity import check_same_test, stamp
-    from slipwave.io import read_dataset, write_dataset, write_table
+    from slipwave.io import write_dataset, write_table
     from slipwave.setup import TestSetup
     from slipwave.simulate_waves import rate_state_law, simulate_waves
 
     fit = read_fit(args.fit)
     setup = TestSetup.from_dict(fit["setup"])
-    video = read_dataset(args.kymograph, "kymograph")
-    if video.attrs.get("test_id"):
-        check_same_test([(args.fit, fit), (args.kymograph, video.attrs)], keys=("test_id",))
-    times = video["time"].values
-    if times.size < 2:
-        raise SlipwaveError(f"{args.kymograph}: fewer than two frames, no frame rate")
-    frame_rate = 1.0 / float(np.median(np.diff(times)))
-    band = tuple(float(value) for value in video.attrs["band_mm"])
-    law = rate_state_law({"a": args.a, "b": args.b, "dc_um": args.dc_um, "mu0": args.mu0,
-                          "v0_um_s": args.v0_um_s})
+    frame_rate, band = _video_frames(args.kymograph, fit)
+    given = {name: getattr(args, name) for name in default.WAVES_LAW}
+    if args.law_fit is not None:
+        if any(value is not None for value in given.values()):
+            raise SlipwaveError("--law-fit gives the law: give it or the law's own options, "
+                                "not both")
+        fitted = read_waves_fit(args.law_fit)
+        check_same_test([(args.fit, fit), (args.law_fit, fitted)])
+        given = fitted["law"]
+    law = rate_state_law({name: default.WAVES_LAW[name] if value is None else value
+                          for name, value in given.items()})
     result = simulate_waves(setup, law, elements=args.elements, field_rate=args.field_rate,
                             sample_rate=args.sample_rate, frame_rate=frame_rate,
-                            band_mm=(band[0], band[1]))
+                            band_mm=band)
     stamp(result.run.attrs, "quasi-dynamic run", fit)
     stamp(result.film.attrs, "kymograph", fit)
     write_dataset(result.run, args.output)
@@ -636,6 +657,42 @@ def _simulate_waves(args: argparse.Namespace) -> None:
           f"{f'{speeds.median():.0f} mm/s' if len(speeds) else 'none'}; {len(result.fronts)} "
           f"slip-rate fronts, median {f'{fronts.median():.0f} mm/s' if len(fronts) else 'none'}; "
           f"{result.run.attrs['steps']} steps")
+
+
+def _fit_waves(args: argparse.Namespace) -> None:
+    import json
+
+    from slipwave.fit import read_fit
+    from slipwave.fit_waves import WavesFitSettings, filmed_test, fit_filmed_test, fit_record
+    from slipwave.identity import check_same_test, stamp
+    from slipwave.io import atomic_output, read_dataset, read_table
+    from slipwave.setup import TestSetup
+
+    fit = read_fit(args.fit)
+    recording = read_dataset(args.recording, "recording")
+    waves = read_table(args.waves, ["t_start_card", "kind", "speed"])
+    check_same_test([(args.fit, fit), (args.recording, recording.attrs),
+                     (args.waves, waves.attrs)])
+    detection = _detection_settings(args)
+    _check_detection(fit, detection, args.fit)
+    frame_rate, band = _video_frames(args.kymograph, fit)
+    test = filmed_test(TestSetup.from_dict(fit["setup"]), recording, waves,
+                       frame_rate=frame_rate, band_mm=band, detection=detection)
+    print(f"{fit['test_id']}: {test.windows} windows of {test.window:.3g} s from "
+          f"{test.settle:.3g} s after the loading, {test.waves} waves ({test.followed} "
+          f"followed)", flush=True)
+    settings = WavesFitSettings(**{name: getattr(args, name)
+                                   for name in default.FIT_WAVES_TUNABLES},
+                                processes=args.processes)
+    posterior = fit_filmed_test(test, settings,  # each round to the log as it ends
+                                progress=lambda line: print(line, flush=True))
+    record = fit_record(test, posterior, settings)
+    stamp(record, None, fit)
+    with atomic_output(args.output) as temporary:
+        temporary.write_text(json.dumps(record, indent=2), encoding="utf-8")
+    values = ", ".join(f"{name} {p['value']:.4g} [{p['low']:.4g}, {p['high']:.4g}]"
+                       for name, p in record["parameters"].items())
+    print(f"{args.fit} -> {args.output}: {values}; {record['guesses']} guesses")
 
 
 def _map_row(args: argparse.Namespace) -> None:
@@ -952,6 +1009,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="its slip-rate fronts ('slipwave simulate-waves --fronts')")
     report.add_argument("--simulated-film", type=_input, default=None,
                         help="its film's kymograph ('slipwave simulate-waves --film')")
+    report.add_argument("--waves-fit", type=_input, default=None,
+                        help="the law fitted on the test's cycle and waves ('slipwave "
+                        "fit-waves -o'), the one its quasi-dynamic run ran under")
     report.add_argument("--pdf", type=Path, default=None, help="also print the page to PDF")
     report.add_argument("--threads", type=_positive_int, default=1,
                         help="processes to draw the figures on (default 1)")
@@ -1046,9 +1106,11 @@ def build_parser() -> argparse.ArgumentParser:
     for name, unit in (("a", ""), ("b", ""), ("dc_um", ", um"), ("mu0", ""),
                        ("v0_um_s", ", um/s")):
         waves_sim.add_argument(f"--{name.replace('_', '-')}",
-                               type=_setting("simulate_waves", name),
-                               default=default.WAVES_LAW[name],
-                               help=f"the law's {name}{unit} (%(default)s)")
+                               type=_setting("simulate_waves", name), default=None,
+                               help=f"the law's {name}{unit} ({default.WAVES_LAW[name]})")
+    waves_sim.add_argument("--law-fit", type=_input, default=None,
+                           help="the law fitted on the test ('slipwave fit-waves -o'): its "
+                           "posterior's medians, in place of the law's options")
     waves_sim.add_argument("--elements", type=_setting("simulate_waves", "elements"),
                            default=default.WAVES_ELEMENTS,
                            help="elements along the contact (%(default)s)")
@@ -1069,6 +1131,35 @@ def build_parser() -> argparse.ArgumentParser:
     waves_sim.add_argument("--fronts", type=Path, required=True,
                            help="CSV of the run's slip-rate fronts (the video's columns)")
     waves_sim.set_defaults(run=_simulate_waves)
+
+    waves_fit = commands.add_parser(
+        "fit-waves", parents=[detection],
+        help="fit a filmed test's rate-and-state law on its cycle and its waves",
+        description="Infer a, b - a, D_c and mu0 of the aging law (v0 1 um/s) from the "
+        "test's slips in windows of three recurrences (T/|N| before them, their drop, their "
+        "rate) and its video's followed waves' median speed, by a synthetic likelihood read "
+        "from an emulator of quasi-dynamic runs of its slab, filmed as the bench films; write "
+        "the medians and 95 % intervals, and the law the simulate-waves stage runs "
+        "(slipwave.fit_waves).")
+    waves_fit.add_argument("--fit", type=_input, required=True,
+                           help="the test's fit.json (its setup, identity and detection)")
+    waves_fit.add_argument("--recording", type=_input, required=True,
+                           help="the test's recording ('slipwave ingest')")
+    waves_fit.add_argument("--waves", type=_input, required=True,
+                           help="its video's waves ('slipwave waves')")
+    waves_fit.add_argument("--kymograph", type=_input, required=True,
+                           help="its video's kymograph (its frame rate and band)")
+    for key in default.FIT_WAVES_TUNABLES:
+        waves_fit.add_argument(
+            f"--{key.replace('_', '-')}", type=_setting("fit_waves", key),
+            default=default.FIT_WAVES_DEFAULTS[key],
+            help=default.setting_schema("fit_waves", key)["description"].replace("%", "%%")
+            + " (%(default)s)")
+    waves_fit.add_argument("--processes", type=_positive_int, default=1,
+                           help="worker processes for the guesses' runs (%(default)s)")
+    waves_fit.add_argument("-o", "--output", type=Path, required=True,
+                           help="fit_waves.json to write")
+    waves_fit.set_defaults(run=_fit_waves)
 
     mapping = commands.add_parser(
         "map", help="the behaviour map over f x H/L (the paper's figure 2)",
@@ -1165,7 +1256,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="fit friction laws to a test through the solver",
         description="Read the test's configuration from its recording and the campaign "
         "table's cells, then fit each friction law on the slip events (T/|N| at gross "
-        "slips, their times, slip counts) with 95 %% intervals, and choose by AIC.")
+        "slips, their times, slip counts) with 95 % intervals, and choose by AIC.")
     fit.add_argument("recording", type=_input, help="recording netCDF from 'slipwave ingest'")
     fit.add_argument("-o", "--output", type=Path, required=True, help="fit.json to write")
     fit.add_argument("--setting", type=_setting_pair, nargs="*", default=[],
@@ -1342,7 +1433,7 @@ def build_parser() -> argparse.ArgumentParser:
     slider_predict = commands.add_parser(
         "slider-predict", help="a spring-slider record's posterior predictive",
         description="Simulate the record's bench under posterior samples of the fit and say, "
-        "feature by feature, whether the record lies in the predictive's 95 %% interval, and "
+        "feature by feature, whether the record lies in the predictive's 95 % interval, and "
         "which regime is predicted and measured.")
     slider_predict.add_argument("record", type=_input, help="record netCDF")
     slider_predict.add_argument("--posterior", type=_input, required=True,

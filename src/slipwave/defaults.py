@@ -149,6 +149,14 @@ WAVES_ELEMENTS: int = _setting("simulate_waves", "elements")
 WAVES_FIELD_RATE_HZ: float = _setting("simulate_waves", "field_rate_hz")
 """Records per second of their nodes' fields."""
 
+# The fit of filmed tests' rate-and-state laws (slipwave.fit_waves; ``fit_waves``).
+FIT_WAVES_TUNABLES: tuple[str, ...] = ("elements", "members", "design", "refinements",
+                                       "samples", "mesh_checks", "seed")
+"""The settings of that fit, each an option of ``slipwave fit-waves`` of its name."""
+FIT_WAVES_DEFAULTS: dict[str, int] = {key: _setting("fit_waves", key)
+                                      for key in FIT_WAVES_TUNABLES}
+"""Their defaults."""
+
 # Spring-slider campaigns (slipwave.fit.slider; config section ``sliders``).
 SLIDER_TUNABLES: tuple[str, ...] = ("states", "members", "design", "acquisitions",
                                     "exploration", "samples", "draws", "seed")

@@ -37,15 +37,17 @@ import contextlib
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from os import PathLike
 from typing import Any
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 from scipy.stats import multivariate_normal, qmc
+from threadpoolctl import threadpool_limits
 
 from slipwave.compare import MEDIAN_ERROR
-from slipwave.defaults import BAND_MM
+from slipwave.defaults import BAND_MM, FIT_WAVES_DEFAULTS, FIT_WAVES_TUNABLES
 from slipwave.errors import SlipwaveError
 from slipwave.events.detect import DEFAULT_DETECTION, DetectionSettings, detect_events
 from slipwave.fit.emulator import emulated_posterior, emulator_search
@@ -53,10 +55,17 @@ from slipwave.fit.likelihood import shrunk_covariance
 from slipwave.fit.search import central_intervals
 from slipwave.fit.slider import rate_state_values
 from slipwave.setup import TestSetup
-from slipwave.simulate_waves import film_kymograph, on_test_clock
+from slipwave.simulate_waves import (
+    ONE_BLAS_THREAD,
+    UM_PER_M,
+    film_kymograph,
+    on_test_clock,
+    rate_state_law,
+)
 from slipwave.solver.quasi_dynamic import Drive, record_times, simulate_quasi_dynamic, slab_body
 from slipwave.solver.rate_state import RateState
 from slipwave.solver.signals import quasi_dynamic_signals
+from slipwave.validation import read_json
 from slipwave.video.waves import track_waves
 
 PARAMETERS = ("a", "b_minus_a", "log10_dc", "mu0")
@@ -349,6 +358,13 @@ def simulate_guess(test: FilmedTest, law: RateState, *, elements: int, members: 
         as the test's; where that leaves fewer than ``members`` (a law that slips late,
         or never), at the test's own first window.
     """
+    with threadpool_limits(limits=ONE_BLAS_THREAD):
+        return _simulated(test, law, elements=elements, members=members, seed=seed)
+
+
+def _simulated(test: FilmedTest, law: RateState, *, elements: int, members: int, seed: int
+               ) -> Simulated | None:
+    """:func:`simulate_guess` on the threads it is given."""
     setup = test.setup
     loading = setup["loading_time_s"]
     driven = test.settle + (members + 1) * test.window
@@ -682,14 +698,14 @@ class WavesFitSettings:
 
     """
 
-    elements: int = 80
-    members: int = 4
-    design: int = 8
-    refinements: int = 6
-    samples: int = 2000
-    mesh_checks: int = 4
+    elements: int = FIT_WAVES_DEFAULTS["elements"]
+    members: int = FIT_WAVES_DEFAULTS["members"]
+    design: int = FIT_WAVES_DEFAULTS["design"]
+    refinements: int = FIT_WAVES_DEFAULTS["refinements"]
+    samples: int = FIT_WAVES_DEFAULTS["samples"]
+    mesh_checks: int = FIT_WAVES_DEFAULTS["mesh_checks"]
     processes: int = 1
-    seed: int = 0
+    seed: int = FIT_WAVES_DEFAULTS["seed"]
 
 
 def _simulate_job(job: tuple[FilmedTest, np.ndarray, int, WavesFitSettings]
@@ -749,19 +765,36 @@ class WavesPosterior:
         values["dc_um"] = 1e6 * values.pop("dc")
         return central_intervals(values, probability)
 
+    def law(self) -> RateState:
+        """The law the test's waves are simulated with: at the posterior's medians.
+
+        Each of :data:`PARAMETERS` at its marginal median (b is a's median plus b - a's).
+
+        Returns
+        -------
+        RateState
+            The aging law (:func:`law_at`).
+        """
+        return law_at(np.median(self.samples, axis=0))
+
     def to_dict(self) -> dict[str, Any]:
         """The fit as JSON-ready values.
 
         Returns
         -------
         dict
-            ``parameters`` (:meth:`interval`), ``guesses``, ``best`` (the best guess),
-            ``mesh_error`` (``card`` by feature, ``speed``).
+            ``parameters`` (:meth:`interval`), ``law`` (:meth:`law`: ``a``, ``b``,
+            ``dc_um``, ``mu0``, ``v0_um_s``, the ``simulate_waves`` section's keys),
+            ``guesses``, ``best`` (the best guess), ``mesh_error`` (``card`` by feature,
+            ``speed``).
         """
         finite = np.isfinite(self.logliks)
         best = self.points[finite][int(np.argmax(self.logliks[finite]))]
+        law = self.law()
         return {"parameters": {name: dict(zip(("value", "low", "high"), values, strict=True))
                                for name, values in self.interval().items()},
+                "law": {"a": law.a, "b": law.b, "dc_um": law.dc * UM_PER_M, "mu0": law.mu0,
+                        "v0_um_s": law.v0 * UM_PER_M},
                 "guesses": int(self.points.shape[0]),
                 "best": dict(zip(PARAMETERS, (float(v) for v in best), strict=True)),
                 "mesh_error": {"card": dict(zip(CARD_FEATURES, self.mesh_error.card.tolist(),
@@ -863,3 +896,63 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
     error = carried()
     logliks = np.array([loglik(test, run, error) for run in runs])
     return WavesPosterior(samples, points, logliks, error)
+
+
+def fit_record(test: FilmedTest, posterior: WavesPosterior, settings: WavesFitSettings
+               ) -> dict[str, Any]:
+    """What ``slipwave fit-waves`` writes of a test's fit (``fit_waves.schema.json``).
+
+    Parameters
+    ----------
+    test
+        The test fitted.
+    posterior
+        Its fit.
+    settings
+        The search's settings.
+
+    Returns
+    -------
+    dict
+        :meth:`WavesPosterior.to_dict`, with ``test`` (the windows, their features'
+        mean and spread, the waves in them, those followed and their median speed),
+        ``settings`` (all but the processes, which change no number) and ``detection``.
+        The test's identity is the caller's to stamp.
+    """
+    speeds = np.asarray(test.speeds, dtype=float)
+    return {**posterior.to_dict(),
+            "test": {"windows": test.windows, "window_s": test.window,
+                     "settle_s": test.settle,
+                     "features": dict(zip(CARD_FEATURES, test.observed, strict=True)),
+                     "spread": dict(zip(CARD_FEATURES, test.spread, strict=True)),
+                     "waves": test.waves, "followed": test.followed,
+                     "median_speed_mm_s": float(np.median(speeds)) if speeds.size else None,
+                     "frame_rate": test.frame_rate},
+            "settings": {name: getattr(settings, name) for name in FIT_WAVES_TUNABLES},
+            "detection": test.detection.to_dict()}
+
+
+def read_waves_fit(path: str | PathLike[str]) -> dict[str, Any]:
+    """A ``fit_waves.json``, held to its schema, its law one the solver takes.
+
+    Parameters
+    ----------
+    path
+        The file (``slipwave fit-waves -o``).
+
+    Returns
+    -------
+    dict
+        Its content (:func:`fit_record`).
+
+    Raises
+    ------
+    SlipwaveError
+        ``<path>: <key>: <what is wrong>`` (or the line and column of broken JSON).
+    """
+    record = read_json(path, "fit_waves")
+    try:
+        rate_state_law(record["law"])
+    except (SlipwaveError, ValueError) as err:
+        raise SlipwaveError(f"{path}: law: {err}") from err
+    return record

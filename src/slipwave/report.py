@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,7 @@ from matplotlib.figure import Figure
 
 from slipwave import __version__
 from slipwave.compare import SCATTER_STEP
-from slipwave.errors import warning_lines
+from slipwave.errors import SlipwaveError, warning_lines
 from slipwave.events import EVENT_COLUMNS, events_table, wave_counts
 from slipwave.fit.features import FEATURES
 from slipwave.fit.procedure import band_z
@@ -33,6 +34,7 @@ from slipwave.plot import (
     plot_simulated_fronts,
     plot_space_time,
 )
+from slipwave.simulate_waves import law_text, rate_state_law
 from slipwave.video import ClockFit, open_frames
 
 SETTING_MEANINGS = {
@@ -148,6 +150,26 @@ def _frames_at(frames: str | PathLike[str], wanted: np.ndarray) -> tuple[list[np
     return images, times
 
 
+# the fitted parameters as the page lists them: key, name, units, format
+_FITTED = (("a", "a", "", "%.4f"), ("b", "b", "", "%.4f"), ("b_minus_a", "b - a", "", "%.4f"),
+           ("dc_um", "D<sub>c</sub>", "µm", "%.3g"), ("mu0", "μ<sub>0</sub>", "", "%.3f"))
+
+
+def _fitted_law(waves_fit: Mapping[str, Any], law: str) -> dict[str, Any]:
+    """The fitted law's rows for the page, checked to be the law the run ran under."""
+    fitted = law_text(rate_state_law(waves_fit["law"]))
+    if fitted != law:
+        raise SlipwaveError(f"the quasi-dynamic run ran under the {law}, not the fitted "
+                            f"{fitted}: run the test again under its fit")
+    parameters = waves_fit["parameters"]
+    return {"rows": [{"name": name, "units": units,
+                      **{end: fmt % parameters[key][end] for end in ("value", "low", "high")}}
+                     for key, name, units, fmt in _FITTED],
+            "guesses": int(waves_fit["guesses"]), "windows": int(waves_fit["test"]["windows"]),
+            "window": float(waves_fit["test"]["window_s"]),
+            "elements": int(waves_fit["settings"]["elements"])}
+
+
 def video_summary(
     kymo: xr.Dataset,
     waves: pd.DataFrame,
@@ -159,6 +181,7 @@ def video_summary(
     simulated_waves: pd.DataFrame | None = None,
     simulated_fronts: pd.DataFrame | None = None,
     simulated_film: xr.Dataset | None = None,
+    waves_fit: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The page's video section: kymograph with fronts, frames around the first gross slip.
 
@@ -181,6 +204,9 @@ def video_summary(
         The test run quasi-dynamically, its film's waves, its slip-rate fronts and its
         film's kymograph (``slipwave simulate-waves``), shown beside the video's;
         ``None``: not shown.
+    waves_fit
+        The law fitted on the test's cycle and waves (``slipwave fit-waves``), which the
+        quasi-dynamic run ran under; ``None``: the run's law is the configuration's.
 
     Returns
     -------
@@ -189,7 +215,12 @@ def video_summary(
         counts and directions, median front speed, the clock, the first gross
         slip's time and the pairing; with a quasi-dynamic run, ``simulated`` (its law,
         elements, its film's waves and their median speed, its slip-rate fronts and
-        theirs, and the two figures).
+        theirs, the two figures, and ``fit``: the fitted law's intervals or ``None``).
+
+    Raises
+    ------
+    SlipwaveError
+        If the run did not run under the fitted law given.
 
     """
     figures = [plot_kymograph(kymo, waves)]
@@ -220,8 +251,8 @@ def video_summary(
         filmed = simulated_waves[simulated_waves["kind"] != "unresolved"]
         speeds = filmed["speed"].dropna()
         fronts = simulated_fronts["speed"].dropna()
-        simulated = {"law": str(quasi_dynamic.attrs.get("law_text",
-                                                         quasi_dynamic.attrs.get("law", ""))),
+        law = str(quasi_dynamic.attrs.get("law_text", quasi_dynamic.attrs.get("law", "")))
+        simulated = {"law": law, "fit": None if waves_fit is None else _fitted_law(waves_fit, law),
                      "waves": len(filmed),
                      "unresolved": len(simulated_waves) - len(filmed),
                      "fronts": len(simulated_fronts),

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import xarray as xr
+from threadpoolctl import threadpool_limits
 
 from slipwave.defaults import BAND_MM
 from slipwave.photoelastic import Camera, Photoelastic
@@ -45,6 +46,12 @@ from slipwave.video.waves import MIN_EXTENT, track_waves
 
 UM_PER_M = 1e6
 
+ONE_BLAS_THREAD = 1
+"""The BLAS threads a run and its film use, whatever the caller's (Snakemake sets a job's
+to its threads): a product's sums then run in one order, and a run, whose stick-slip cycle
+is chaotic, is the same run in a workflow's job, a fit's worker or a shell (on the default
+campaign's hl050, the log median speed's change at twice the mesh read 0.657 on one
+thread and 0.592 on two)."""
 FILM_CHUNK = 64
 """Frames whose stresses are computed together (:meth:`Photoelastic.stresses`)."""
 
@@ -252,12 +259,13 @@ def simulate_waves(setup: TestSetup, law: RateState, *, elements: int, field_rat
     kept = record_times(driven, field_rate)
     filmed = record_times(driven, frame_rate)
     slab = setup.slab(elements)
-    run = simulate_quasi_dynamic(
-        slab_body(slab), law,
-        Drive(normal_load=setup["normal_load_n"], drive_speed=setup["speed_mm_s"],
-              normal_control="force"),
-        duration=driven, sample_rate=sample_rate, field_times=np.union1d(kept, filmed))
-    film = film_kymograph(run.sel(field_time=filmed), slab, band_mm=band_mm)
+    with threadpool_limits(limits=ONE_BLAS_THREAD):
+        run = simulate_quasi_dynamic(
+            slab_body(slab), law,
+            Drive(normal_load=setup["normal_load_n"], drive_speed=setup["speed_mm_s"],
+                  normal_control="force"),
+            duration=driven, sample_rate=sample_rate, field_times=np.union1d(kept, filmed))
+        film = film_kymograph(run.sel(field_time=filmed), slab, band_mm=band_mm)
     fronts = front_waves(run, min_extent=MIN_EXTENT)
     waves = track_waves(film)
     for table in (fronts, waves):

@@ -49,6 +49,8 @@ def report_inputs(wildcards):
                 simulated_fronts=f"results/{test}/simulated/fronts.csv",
                 simulated_film=f"results/{test}/simulated/kymograph.nc",
             )
+            if config["fit_waves"]["enabled"]:
+                inputs.update(waves_fit=f"results/{test}/fit_waves.json")
     return inputs
 
 
@@ -64,7 +66,7 @@ def video_options(wildcards, input):
         f"--{name.replace('_', '-')} {shlex.quote(str(input[name]))}"
         for name in (
             "kymograph", "waves", "fused", "clock", "frames", "quasi_dynamic", "simulated_waves",
-            "simulated_fronts", "simulated_film",
+            "simulated_fronts", "simulated_film", "waves_fit",
         )
         if name in input.keys()
     )
@@ -146,6 +148,35 @@ def fit_options(wildcards):
         for key in ("members", "stiffness_error", "speed_error", "step_jitter",
                     "ratio_error", "time_error_s", "stages", "design", "acquisitions",
                     "refinements", "exploration", "samples", "predictive_members", "seed")
+    )
+
+
+def fit_waves_options(wildcards):
+    """The rate-and-state fit's settings, as slipwave fit-waves' options."""
+    return " ".join(
+        f"--{key.replace('_', '-')} {config['fit_waves'][key]}"
+        for key in ("elements", "members", "design", "refinements", "samples", "mesh_checks",
+                    "seed")
+    )
+
+
+def simulate_waves_inputs(wildcards):
+    inputs = {
+        "fit": f"results/{wildcards.test_id}/fit.json",
+        "kymograph": f"results/{wildcards.test_id}/kymograph.nc",
+    }
+    if config["fit_waves"]["enabled"]:
+        inputs["law_fit"] = f"results/{wildcards.test_id}/fit_waves.json"
+    return inputs
+
+
+def law_options(wildcards, input):
+    """The quasi-dynamic run's law: the test's fitted one, else the config's."""
+    if "law_fit" in input.keys():
+        return f"--law-fit {shlex.quote(str(input.law_fit))}"
+    return " ".join(
+        f"--{key.replace('_', '-')} {config['simulate_waves'][key]}"
+        for key in ("a", "b", "dc_um", "mu0", "v0_um_s")
     )
 
 

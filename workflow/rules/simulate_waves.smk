@@ -1,10 +1,10 @@
 rule simulate_waves:
-    """A filmed test simulated quasi-dynamically under rate-and-state friction and filmed at
-    its video's frame rate: its waves with a speed, measured as the video's, for the compare
-    stage; and the run's slip-rate fronts."""
+    """A filmed test simulated quasi-dynamically under rate-and-state friction (its fitted
+    law with fit_waves enabled, else the config's) and filmed at its video's frame rate: its
+    waves with a speed, measured as the video's, for the compare stage; and the run's
+    slip-rate fronts."""
     input:
-        fit="results/{test_id}/fit.json",
-        kymograph="results/{test_id}/kymograph.nc",
+        unpack(simulate_waves_inputs),
     output:
         run="results/{test_id}/simulated/quasi_dynamic.nc",
         film="results/{test_id}/simulated/kymograph.nc",
@@ -13,10 +13,7 @@ rule simulate_waves:
     log:
         "results/logs/simulate_waves/{test_id}.log",
     params:
-        law=" ".join(
-            f"--{key.replace('_', '-')} {config['simulate_waves'][key]}"
-            for key in ("a", "b", "dc_um", "mu0", "v0_um_s")
-        ),
+        law=law_options,
         elements=config["simulate_waves"]["elements"],
         field_rate=config["simulate_waves"]["field_rate_hz"],
     threads: 1
