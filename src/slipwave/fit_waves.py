@@ -688,9 +688,10 @@ class WavesFitSettings:
     samples
         Posterior samples kept.
     mesh_checks
-        Posterior draws run again at twice the mesh after the search; the mesh's error
-        carried by the posterior, sampled again, is then the root mean square of their
-        features' changes and the design's best guess's (0: that guess's alone).
+        Points of the posterior run again at twice the mesh after the search: its median
+        (the law the stage runs) and draws; the mesh's error carried by the posterior,
+        sampled again, is then the root mean square of their features' changes and the
+        design's best guess's (0: that guess's alone).
     processes
         Worker processes for the guesses' runs.
     seed
@@ -813,8 +814,9 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
     features' change (:func:`mesh_error`) is carried by every likelihood from then on, so
     that an interval does not claim what the guesses' mesh cannot resolve. That change
     varies over the prior; after the search, :attr:`WavesFitSettings.mesh_checks`
-    posterior draws are run at both meshes, and the posterior is sampled again with the
-    root mean square of every change measured.
+    points of the posterior (its median, the law :meth:`WavesPosterior.law` hands on, and
+    draws) are run at both meshes, and the posterior is sampled again with the root mean
+    square of every change measured.
 
     Parameters
     ----------
@@ -879,8 +881,11 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
         except SlipwaveError as err:
             raise SlipwaveError(f"test {test.setup.test_id!r}: {err}") from err
         if settings.mesh_checks:  # the mesh's error where the posterior is, then again
+            # the posterior's median first (the law the stage runs: its change is the one a
+            # comparison at another mesh meets), then draws
             rng = np.random.default_rng(settings.seed)
-            checked = samples[rng.choice(len(samples), settings.mesh_checks, replace=False)]
+            drawn = samples[rng.choice(len(samples), settings.mesh_checks - 1, replace=False)]
+            checked = np.vstack([np.median(samples, axis=0), drawn])
             coarse = simulated(checked, settings.elements)
             fine = simulated(checked, 2 * settings.elements)
             runs.extend(coarse)
