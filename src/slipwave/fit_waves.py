@@ -313,6 +313,28 @@ def law_at(point: np.ndarray) -> RateState:
     return RateState(a=a, b=a + excess, dc=10.0**log_dc, mu0=mu0, v0=1e-6)
 
 
+def median_point(samples: np.ndarray) -> np.ndarray:
+    """The posterior's point handed on: each of :data:`PARAMETERS` at its marginal median.
+
+    Parameters
+    ----------
+    samples
+        Posterior samples, shape (n, 4).
+
+    Returns
+    -------
+    numpy.ndarray
+        (a, b - a, log10 D_c, mu0).
+
+    Examples
+    --------
+    >>> median_point(np.array([[0.01, 0.02, -4.5, 0.9], [0.012, 0.01, -4.3, 0.8],
+    ...                        [0.014, 0.03, -4.1, 1.0]])).tolist()
+    [0.012, 0.02, -4.3, 0.9]
+    """
+    return np.median(samples, axis=0)
+
+
 @dataclass(frozen=True)
 class Simulated:
     """A guess's run, summed up as the test is.
@@ -763,7 +785,7 @@ class WavesPosterior:
             ``a``, ``b``, ``b_minus_a``, ``dc_um`` (um), ``mu0``: (median, low, high).
         """
         values = rate_state_values(self.samples)
-        values["dc_um"] = 1e6 * values.pop("dc")
+        values["dc_um"] = UM_PER_M * values.pop("dc")
         return central_intervals(values, probability)
 
     def law(self) -> RateState:
@@ -776,7 +798,7 @@ class WavesPosterior:
         RateState
             The aging law (:func:`law_at`).
         """
-        return law_at(np.median(self.samples, axis=0))
+        return law_at(median_point(self.samples))
 
     def to_dict(self) -> dict[str, Any]:
         """The fit as JSON-ready values.
@@ -885,7 +907,7 @@ def fit_filmed_test(test: FilmedTest, settings: WavesFitSettings,
             # comparison at another mesh meets), then draws
             rng = np.random.default_rng(settings.seed)
             drawn = samples[rng.choice(len(samples), settings.mesh_checks - 1, replace=False)]
-            checked = np.vstack([np.median(samples, axis=0), drawn])
+            checked = np.vstack([median_point(samples), drawn])
             coarse = simulated(checked, settings.elements)
             fine = simulated(checked, 2 * settings.elements)
             runs.extend(coarse)

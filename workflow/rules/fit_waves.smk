@@ -19,7 +19,7 @@ rule fit_waves:
     params:
         tunables=fit_waves_options,
         detection=detection_options,
-    # the longest jobs (five to eight minutes on two cores): first, the rest around them
+    # the longest jobs (two to six minutes on two cores): first, the rest around them
     priority: 60
     threads: 2
     resources:
