@@ -18,6 +18,15 @@ polyurethane's radiation damping (density 1200 kg/m^3, shear waves at 44 m/s).
    5 %, and Mann-Whitney's U p >= 0.05). Target: its time <= 10 s. Where the time goes
    (each compiled kernel's calls per step, and its time per call at a stuck state and
    in a wave).
+   What a multirate integrator could save at best, on the same test at 320 elements:
+   after each step, each node's own local error estimate (the RMS of its entries', in
+   units of their tolerance) says how much longer a step of that node alone could have
+   been, by its order's power (err^(-1/(q+1))); the node-steps of an ideal integrator
+   that stepped each node at its own pace, with no cost for the coupling, the
+   interpolation of its neighbours or a second history, against those of a global
+   integrator held to the same per-node error (the largest node's pace) and against
+   today's (every node at every step), by what the fastest node does (creeping below
+   0.01 mm/s, nucleating to 1 mm/s, in a front above).
 4. A figure of the 160-element run for the documentation (T/N, where the contact slips
    against time, one wave's arrivals): docs/_static/quasi_dynamic_waves.png.
 
@@ -221,6 +230,85 @@ def where_the_time_goes() -> None:
               f" ({1e6 * share * quiet:.0f} / {1e6 * share * busy:.0f} us per step)")
 
 
+PHASE_SPEEDS = (0.01, 1.0)  # mm/s: creeping, nucleating, a front (the fastest node's rate)
+
+
+@njit(cache=True)
+def _advance_tallied(stepper: Any, reduction: Any, law: Any, band: int, force_scale: float,
+                     gap_scale: float, until: float, front_speed: float, record: Any,
+                     tally: np.ndarray) -> int:
+    """:func:`quasi_dynamic_stretch.advance`, tallying each step's node-steps by phase.
+
+    ``tally[phase]``: [steps, nodes x the largest node's pace, the sum of the nodes'
+    paces], a node's pace being the share of the step it could not have taken alone.
+    """
+    sc = stepper.scalars
+    room = record.crossing_node.size - reduction.closed.size
+    per = 1 + law.b.size
+    nodes = stepper.D.shape[1] // per
+    while True:
+        if (record.cursor[stretch_steps.CROSSINGS] > room
+                or record.cursor[stretch_steps.FIELDS_HELD] == record.field_states.shape[0]):
+            return stretch_steps.FULL
+        order = sc[stiff_steps._ORDER]
+        if stiff_steps.step(stepper, reduction, law, band) != stiff_steps.OK:
+            return stretch_steps.TOO_SMALL
+        end = sc[stiff_steps.T]
+        margin, after = steps.step_end(end, stepper.D[0], reduction, law, force_scale,
+                                       gap_scale)
+        if margin < -1.0:
+            return stretch_steps.CHANGES
+        stretch_steps.record_step(stepper, reduction, law, sc[stiff_steps.T_OLD], end, after,
+                                  front_speed, record)
+        fastest = np.abs(after).max() if after.size else 0.0
+        phase = 0 if fastest < PHASE_SPEEDS[0] else (1 if fastest < PHASE_SPEEDS[1] else 2)
+        largest, total = 0.0, 0.0
+        for node in range(nodes):
+            square = 0.0
+            for m in range(per):
+                square += stepper.error[node * per + m] ** 2
+            pace = (square / per) ** (0.5 / (order + 1.0))
+            largest = max(largest, pace)
+            total += pace
+        tally[phase, 0] += 1.0
+        tally[phase, 1] += nodes * largest
+        tally[phase, 2] += total
+        if end >= until or end >= sc[stiff_steps.BOUND]:
+            return stretch_steps.PASSED
+
+
+def multirate_bound(elements: int, seconds: float) -> None:
+    """The node-steps an ideal multirate integrator would take on the 280 s test."""
+    tally = np.zeros((3, 3))
+    advance = stretch_steps.advance
+
+    def tallied(*arguments: Any) -> int:
+        return _advance_tallied(*arguments, tally)
+
+    stretch_steps.advance = tallied  # type: ignore[assignment]
+    try:
+        ds = simulate_quasi_dynamic(slab_body(Slab(elements=elements)), LAW, DRIVE,
+                                    duration=280.0, sample_rate=100.0,
+                                    field_times=record_times(280.0, 10.0))
+    finally:
+        stretch_steps.advance = advance
+    nodes = elements + 1
+    today = tally[:, 0].sum() * nodes
+    print(f"quasi-dynamic: an ideal multirate integrator on the 280 s test at {elements} "
+          f"elements ({ds.attrs['steps']} steps): each node stepped at its own error's pace"
+          f" would take {100 * tally[:, 2].sum() / today:.0f} % of today's node-steps (every "
+          f"node at every step), {tally[:, 2].sum() / tally[:, 1].sum():.2f} of a global "
+          f"integrator's held to the same per-node error; at today's cost per node-step, "
+          f"{seconds * tally[:, 2].sum() / today:.1f} s against {seconds:.1f} s, before any "
+          f"cost of its coupling")
+    for phase, name in enumerate(("creeping (fastest node below 0.01 mm/s)",
+                                  "nucleating (0.01 to 1 mm/s)", "in a front (above 1 mm/s)")):
+        count, largest, total = tally[phase]
+        print(f"    {name}: {100 * count / tally[:, 0].sum():.0f} % of the steps; ideal "
+              f"per-node work {100 * total / (count * nodes):.0f} % of today's there, "
+              f"{largest / total:.1f} times less than the same-error global integrator's")
+
+
 def whole_test_convergence(coarse: int, coarse_speeds: np.ndarray, fine: int,
                            fine_speeds: np.ndarray) -> tuple[float, float]:
     """A whole 280 s test's front speeds at a mesh against twice its elements.
@@ -309,6 +397,7 @@ def main() -> None:
                    at_least=False)
     print(f"quasi-dynamic: 280 s test at the mesh used, {used} elements: "
           f"{taken[used]:.1f} s ({status} the {TIME_TARGET:.0f} s target)")
+    multirate_bound(320, taken[320])
     tolerances()
     where_the_time_goes()
     finish()

@@ -86,6 +86,26 @@ def test_a_band_film_is_the_whole_frame_in_the_band_and_bare_elsewhere(simulatio
     assert np.abs(noisy.astype(float) - part).max() > 0
 
 
+@pytest.mark.parametrize(("bits", "below"), [(8, None), (8, 4.0), (16, 4.0)])
+def test_frames_rendered_at_once_are_those_rendered_one_by_one(simulation, bits, below):
+    # the film's frames, a chunk at a time: the same blur, noise (drawn frame after frame
+    # from one stream), sync LED and quantisation as one frame at a time
+    photo = Photoelastic(SLAB, Camera(bits=bits), below=below)
+    steps = np.linspace(0, simulation.sizes["step"] - 1, 5).astype(int)
+    stresses = photo.stresses(np.stack([contact(simulation, k) for k in steps]))
+    leds = np.array([False, True, True, False, True])
+    one, chunk = np.random.default_rng(3), np.random.default_rng(3)
+    expected = [photo.render(stress, one, led=bool(led)) for stress, led in zip(
+        stresses, leds, strict=True)]
+    frames = photo.render_frames(stresses, chunk, leds=leds)
+    assert frames.dtype == expected[0].dtype and frames.shape == (5, *expected[0].shape)
+    for frame, image in zip(frames, expected, strict=True):
+        np.testing.assert_array_equal(frame, image)
+    bright = 0.8 * np.iinfo(frames.dtype).max
+    assert frames[1][4:8, 4:8].mean() > bright > frames[0][4:8, 4:8].mean()  # the lit LED
+    assert not np.array_equal(frames[0], frames[-1])
+
+
 @pytest.mark.parametrize("bits", [8, 16])
 def test_ffv1_is_lossless_and_keeps_timestamps(tmp_path, bits):
     frames = random_frames(1, bits, (160, 320), 4)

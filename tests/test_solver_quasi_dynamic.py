@@ -306,6 +306,28 @@ def test_the_fields_are_recorded_when_asked() -> None:
                                   sample_rate=10.0, field_times=np.array([0.5, 1.5]))
 
 
+def test_a_full_buffer_of_field_states_loses_no_field(monkeypatch: pytest.MonkeyPatch
+                                                      ) -> None:
+    # the compiled steps hold the states at the field times until the driver takes them;
+    # a buffer of two fills within steps and between contact changes, and the fields
+    # are those of the default buffer, every record taken
+    body = qd.slab_body(Slab(elements=40))
+
+    def run() -> xr.Dataset:
+        return qd.simulate_quasi_dynamic(body, SLAB_LAW, qd.Drive(76.0, 0.048), duration=50.0,
+                                         sample_rate=20.0, field_times=qd.record_times(50.0, 40.0))
+
+    held = run()
+    monkeypatch.setattr(qd, "_FIELD_BUFFER", 2)
+    small = run()
+    assert small.attrs["steps"] == held.attrs["steps"] and held.attrs["contact_changes"] > 0
+    assert (small["contact"].values.sum(axis=1) > 0).all()  # every record taken
+    for name in ("slip_rate", "log_state", "p", "q", "contact", "ux", "uy"):
+        expected = held[name].values
+        np.testing.assert_allclose(small[name].values, expected, rtol=1e-12,
+                                   atol=1e-12 * np.abs(expected).max())
+
+
 def _crossings(x: np.ndarray, nodes: np.ndarray, rises: np.ndarray, falls: np.ndarray
                ) -> xr.Dataset:
     """A made-up simulation with these slip intervals."""

@@ -20,6 +20,9 @@ from scipy import ndimage
 
 from slipwave.solver.slab import Slab, displacement_recovery
 
+LED_PIXELS = (slice(3, 9), slice(3, 9))
+"""The sync LED's patch of a frame (rows, columns)."""
+
 
 @dataclass(frozen=True)
 class Camera:
@@ -220,15 +223,15 @@ class Photoelastic:
         Parameters
         ----------
         stress
-            From :meth:`stress`.
+            From :meth:`stress` (3, pixels), or :meth:`stresses` (frames, 3, pixels).
 
         Returns
         -------
         numpy.ndarray
-            Fringe order at each pixel.
+            Fringe order at each pixel (of each frame).
 
         """
-        difference = np.hypot(stress[0] - stress[1], 2 * stress[2])
+        difference = np.hypot(stress[..., 0, :] - stress[..., 1, :], 2 * stress[..., 2, :])
         return difference * self.slab.width / self.camera.fringe_value
 
     def render(
@@ -251,20 +254,66 @@ class Photoelastic:
             The frame.
 
         """
+        return self.render_frames(stress[None], rng, leds=np.array([led]))[0]
+
+    def render_frames(self, stresses: np.ndarray, rng: np.random.Generator, *,
+                      leds: np.ndarray | None = None) -> np.ndarray:
+        """Frames (frames x height x width, uint8 or uint16) of stress fields, at once.
+
+        The same frames as :meth:`render` called on each in turn with the same stream
+        (the noise is drawn frame after frame), without a loop over them.
+
+        Parameters
+        ----------
+        stresses
+            From :meth:`stresses`.
+        rng
+            The camera noise's random stream.
+        leds
+            (frames,) whether the sync LED is lit in each; ``None``: in none.
+
+        Returns
+        -------
+        numpy.ndarray
+            The frames.
+
+        Examples
+        --------
+        >>> photo = Photoelastic(Slab(elements=16), Camera(width=80, height=40))
+        >>> u = np.zeros((2, 2 * 17))
+        >>> u[1, :17] = 0.01  # the second frame's contact sheared by 10 um
+        >>> one = [photo.render(s, np.random.default_rng(0)) for s in photo.stresses(u)[:1]]
+        >>> frames = photo.render_frames(photo.stresses(u), np.random.default_rng(0))
+        >>> frames.shape, bool((frames[0] == one[0]).all())
+        ((2, 40, 80), True)
+        """
         camera = self.camera
-        image = np.full((camera.height, camera.width), camera.background)
-        image[self.interface_row :, :] = camera.flat
-        orders = self.fringe_order(stress)
-        image[self.inside] = camera.background + camera.intensity * np.sin(np.pi * orders) ** 2
-        if led:
-            image[3:9, 3:9] = 255.0
-        if self.rows != slice(0, camera.height):  # a band's film: the rest stays bare
-            image[self.rows.stop :, :] = camera.background
-        imaged = image[self.rows]
-        if camera.blur:
-            imaged[:] = ndimage.gaussian_filter(imaged, camera.blur)
+        count = stresses.shape[0]
+        banded = self.rows != slice(0, camera.height)
+        bare = np.full((2, camera.height, camera.width), camera.background)  # LED off, on
+        bare[:, self.interface_row :, :] = camera.flat
+        bare[(1, *LED_PIXELS)] = 255.0
+        if banded:  # a band's film: the rest stays bare
+            bare[:, self.rows.stop :, :] = camera.background
+        lit = (np.zeros(count, dtype=int) if leds is None else np.asarray(leds, dtype=int))
+        # only the rows imaged change from frame to frame: the rest is the bare frame
+        frames = self._quantised(bare)[lit]
+        imaged = bare[0, self.rows][None].repeat(count, axis=0)
+        orders = self.fringe_order(stresses)
+        imaged[:, self.inside[self.rows]] = (camera.background
+                                             + camera.intensity * np.sin(np.pi * orders) ** 2)
+        led = np.zeros(bare.shape[1:], dtype=bool)
+        led[LED_PIXELS] = True
+        imaged[lit == 1] = np.where(led[self.rows], 255.0, imaged[lit == 1])  # drawn last
+        if camera.blur:  # each frame alone: no blur across time
+            imaged = ndimage.gaussian_filter(imaged, (0.0, camera.blur, camera.blur))
         if camera.noise:
             imaged += rng.normal(0.0, camera.noise, imaged.shape)
-        if camera.bits == 16:
+        frames[:, self.rows] = self._quantised(imaged)
+        return frames
+
+    def _quantised(self, image: np.ndarray) -> np.ndarray:
+        """Grey levels as the camera's bits record them."""
+        if self.camera.bits == 16:
             return np.clip(np.round(image * 257.0), 0, 65535).astype(np.uint16)
         return np.clip(np.round(image), 0, 255).astype(np.uint8)

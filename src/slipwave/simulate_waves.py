@@ -202,9 +202,10 @@ def film_kymograph(run: xr.Dataset, slab: Slab, *, band_mm: tuple[float, float],
 
     def frames() -> Iterator[Frame]:
         for first in range(0, len(times), FILM_CHUNK):  # the stresses a chunk at a time
-            chunk = photo.stresses(displacements[first : first + FILM_CHUNK])
-            for k, stress in enumerate(chunk, start=first):
-                yield Frame(k, float(times[k]), photo.render(stress, rng))
+            chunk = photo.render_frames(photo.stresses(displacements[first : first + FILM_CHUNK]),
+                                        rng)
+            for k, image in enumerate(chunk, start=first):
+                yield Frame(k, float(times[k]), image)
 
     film = kymograph(frames(), geometry, band_mm)
     film.attrs["source"] = "the quasi-dynamic run, filmed by the virtual bench's camera"

@@ -36,7 +36,7 @@ from slipwave.bench.sensors import Sensor
 from slipwave.errors import SlipwaveError
 from slipwave.photoelastic import Photoelastic
 from slipwave.resources import require_memory
-from slipwave.simulate_waves import on_test_clock, rate_state_law
+from slipwave.simulate_waves import FILM_CHUNK, on_test_clock, rate_state_law
 from slipwave.solver.fronts import front_waves
 from slipwave.solver.quasi_dynamic import (
     Drive,
@@ -54,20 +54,22 @@ class QuasiDynamicResult(BenchResult):
     """A test made quasi-dynamically: its frames film the run's displacements."""
 
     def frames(self) -> Iterator[np.ndarray]:
-        """The video's frames, rendered one at a time (memory does not grow)."""
+        """The video's frames, rendered a chunk at a time (memory does not grow)."""
         spec, run = self.spec, self.simulation
         camera = Photoelastic(spec.slab(), spec.camera)
         rng = np.random.default_rng([self.seed, 99])
         field_time = run["field_time"].values
         displacements = contact_displacements(run)
-        for t in spec.camera.acquisition_time(self.frame_times):
-            if t < spec.loading_time:
-                u = t / spec.loading_time * displacements[0]
-            else:  # the run recorded its fields at the frames' times
-                u = displacements[min(int(np.searchsorted(field_time, t - 1e-9)),
-                                      field_time.size - 1)]
-            led = spec.sync_time <= t < spec.sync_time + LED_DURATION
-            yield camera.render(camera.stress(u), rng, led=bool(led))
+        times = spec.camera.acquisition_time(self.frame_times)
+        # the run recorded its fields at the frames' times; the loading is ramped
+        records = np.minimum(np.searchsorted(field_time, times - 1e-9), field_time.size - 1)
+        leds = (spec.sync_time <= times) & (times < spec.sync_time + LED_DURATION)
+        for first in range(0, times.size, FILM_CHUNK):
+            chunk = slice(first, first + FILM_CHUNK)
+            u = displacements[records[chunk]]
+            loading = times[chunk] < spec.loading_time
+            u[loading] = (times[chunk][loading, None] / spec.loading_time) * displacements[0]
+            yield from camera.render_frames(camera.stresses(u), rng, leds=leds[chunk])
 
 
 def simulate_quasi_dynamic_test(spec: BenchTest, *, seed: int = 0,

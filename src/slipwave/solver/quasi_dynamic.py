@@ -70,6 +70,7 @@ the drive's speed."""
 _MAX_CONTACT_CHANGES = 100  # changes of the closed set at one instant before giving up
 _MAX_STEP = 0.1  # s: the longest step, so that a change of contact is looked for often
 _CROSSINGS_BUFFER = 64  # crossings held per node before the compiled steps hand them over
+_FIELD_BUFFER = 256  # field states the compiled steps hold before they hand them over
 
 JACOBIAN_BAND_NODES = 8
 """The Jacobian the steps factorise keeps each node's coupling to this many neighbours on
@@ -313,25 +314,28 @@ def _approach(body: ContactBody, normal_load: float) -> tuple[np.ndarray, float,
     raise SlipwaveError("the normal loading found no contact that carries the load")
 
 
-def _state_at(body: ContactBody, contact: _Contact, t: float, y: np.ndarray, stride: int
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+def _state_at(body: ContactBody, contact: _Contact, times: np.ndarray, ys: np.ndarray,
+              stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Every node's displacements, the flat's forces ``[r_x, r_y]``, gaps; and dx.
 
-    ``stride``: entries per node in the state.
+    At each of ``times`` (k,), from the states ``ys`` (k, size), a row each; ``stride``:
+    entries per node in the state.
     """
     n = body.nodes
-    closed, open_ = contact.reduction.closed, contact.open
-    s = np.ascontiguousarray(y[::stride][closed])
-    dx, dy = steps.flat_position(t, s, contact.reduction)
-    u = np.zeros(2 * n)
-    u[closed] = dx + s
-    u[n + closed] = dy - body.initial_gap[closed]
+    reduction = contact.reduction
+    closed, open_ = reduction.closed, contact.open
+    s = np.ascontiguousarray(ys[:, ::stride][:, closed])
+    dx, dy = np.array([steps.flat_position(t, row, reduction) for t, row in zip(times, s,
+                                                                                  strict=True)]).T
+    u = np.zeros((times.size, 2 * n))
+    u[:, closed] = dx[:, None] + s
+    u[:, n + closed] = dy[:, None] - body.initial_gap[closed]
     kept = np.concatenate([closed, n + closed])
     free = np.concatenate([open_, n + open_])
-    u[free] = contact.response @ u[kept]
-    r = body.stiffness @ u
-    r[free] = 0.0
-    gap = body.initial_gap + u[n:] - dy
+    u[:, free] = u[:, kept] @ contact.response.T
+    r = u @ body.stiffness.T
+    r[:, free] = 0.0
+    gap = body.initial_gap + u[:, n:] - dy[:, None]
     return u, r, gap, dx
 
 
@@ -461,8 +465,8 @@ def simulate_quasi_dynamic(
     y[::stride] = u[:n]
     flat = _flat_row(drive, dy, body.width)
     contact = _reduce(body, closed, flat)
-    record = _Record(sample_times, field_times, n,
-                     contact.reduction.readouts_x.size + 2)
+    record = _Record(sample_times, field_times, n, contact.reduction.readouts_x.size + 2,
+                     n * stride)
     scales = (tolerance * normal_w / n, tolerance * smallest_dc)
     atol = np.full(n * stride, tolerance)
     atol[::stride] = tolerance * smallest_dc
@@ -477,8 +481,8 @@ def simulate_quasi_dynamic(
         changed = False
         while t < duration:
             status = stretch_steps.advance(stepper, stretch.reduction, steps_law,
-                                           stretch.band, *scales, record.next_field_time(),
-                                           front_speed, taken)
+                                           stretch.band, *scales, math.inf, front_speed,
+                                           taken)
             if status == stretch_steps.TOO_SMALL:
                 raise SlipwaveError(f"the quasi-dynamic steps fell below the smallest at "
                                     f"t = {stepper.scalars[stiff_steps.T]:.9g} s")
@@ -574,15 +578,15 @@ class _Record:
     """What a run records: the readouts and crossings (by the compiled steps), the fields."""
 
     def __init__(self, sample_times: np.ndarray, field_times: np.ndarray, nodes: int,
-                 readouts: int) -> None:
+                 readouts: int, size: int) -> None:
         self.sample_times, self.field_times = sample_times, field_times
         self.fields = np.zeros((7, field_times.size, nodes))
-        self.next_field = 0
         buffer = _CROSSINGS_BUFFER * nodes
         self.steps_record = stretch_steps.Record(
             sample_times, np.full((readouts, sample_times.size), np.nan),
             np.zeros(buffer, dtype=np.int64), np.zeros(buffer),
-            np.zeros(buffer, dtype=np.bool_), np.zeros(2, dtype=np.int64), np.zeros(0))
+            np.zeros(buffer, dtype=np.bool_), field_times, np.zeros((_FIELD_BUFFER, size)),
+            np.zeros(4, dtype=np.int64), np.zeros(0))
         self.crossings: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     @property
@@ -595,19 +599,25 @@ class _Record:
         self.steps_record = self.steps_record._replace(speeds=speeds)
         return self.steps_record
 
-    def next_field_time(self) -> float:
-        """The next field time to record, or infinity when all are."""
-        return (float(self.field_times[self.next_field])
-                if self.next_field < self.field_times.size else math.inf)
-
     def take_fields(self, stretch: _Stretch, body: ContactBody, within: _Interpolant,
                     end: float) -> None:
-        """Record the fields at the field times up to ``end`` (within the last step)."""
-        times = self.field_times
-        while self.next_field < times.size and times[self.next_field] <= end:
-            at = float(times[self.next_field])
-            self.fields[:, self.next_field] = _fields(stretch, body, at, within(at))
-            self.next_field += 1
+        """Record the fields at the field times up to ``end`` (within the last step).
+
+        Those whose states the compiled steps hold, then any the buffer had no room for.
+        """
+        cursor = self.steps_record.cursor
+        held, taken = int(cursor[stretch_steps.FIELDS_HELD]), int(
+            cursor[stretch_steps.NEXT_FIELD])
+        if held:
+            self.fields[:, taken - held:taken] = _fields(
+                stretch, body, self.field_times[taken - held:taken],
+                self.steps_record.field_states[:held])
+            cursor[stretch_steps.FIELDS_HELD] = 0
+        stop = int(np.searchsorted(self.field_times, end, side="right"))
+        if stop > taken:
+            times = self.field_times[taken:stop]
+            self.fields[:, taken:stop] = _fields(stretch, body, times, within(times).T)
+            cursor[stretch_steps.NEXT_FIELD] = stop
 
     def drain(self) -> None:
         """Move the crossings out of the compiled steps' buffer."""
@@ -636,7 +646,8 @@ def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: floa
     """
     n = body.nodes
     for _ in range(_MAX_CONTACT_CHANGES):
-        u, r, gap, dx = _state_at(body, contact, t, y, stride)
+        at_t = _state_at(body, contact, np.array([t]), y[None], stride)
+        u, r, gap, dx = (part[0] for part in at_t)
         closed = contact.reduction.closed
         pulled = closed[r[n + closed] < 0.0]
         pressed_in = contact.open[gap[contact.open] < 0.0]
@@ -650,18 +661,22 @@ def _change_contact(body: ContactBody, contact: _Contact, y: np.ndarray, t: floa
     raise SlipwaveError(f"the contact's closed nodes kept changing at t = {t:.9g} s")
 
 
-def _fields(stretch: _Stretch, body: ContactBody, t: float, y: np.ndarray) -> np.ndarray:
-    """The nodes' slip rate, ln theta (the first state's), p, q, contact, ux and uy at y."""
+def _fields(stretch: _Stretch, body: ContactBody, times: np.ndarray, ys: np.ndarray
+            ) -> np.ndarray:
+    """(7, times, nodes): the slip rate, ln theta (the first state's), p, q, contact, ux, uy.
+
+    At each of ``times``, from the states ``ys`` (times, size).
+    """
     n = body.nodes
     stride = 1 + stretch.law.b.size
     closed = stretch.reduction.closed
-    u, r, _, _ = _state_at(body, stretch.contact, t, y, stride)
-    speed = np.zeros(n)
-    speed[closed] = stretch.step_end(t, y)[1]
-    contact = np.zeros(n)
-    contact[closed] = 1.0
-    return np.stack([speed, y[1::stride], r[n:] / body.tributary, r[:n] / body.tributary,
-                     contact, u[:n], u[n:]])
+    u, r, _, _ = _state_at(body, stretch.contact, times, ys, stride)
+    speed = np.zeros((times.size, n))
+    speed[:, closed] = steps.slip_rates(times, ys, stretch.reduction, stretch.law)
+    contact = np.zeros((times.size, n))
+    contact[:, closed] = 1.0
+    return np.stack([speed, ys[:, 1::stride], r[:, n:] / body.tributary,
+                     r[:, :n] / body.tributary, contact, u[:, :n], u[:, n:]])
 
 
 def _to_dataset(body: ContactBody, law: RateState, drive: Drive, record: _Record,

@@ -119,7 +119,8 @@ class Reduction(NamedTuple):
     damping: np.ndarray
 
 
-_NORMAL = 1  # the readouts' row that sums the normal load
+NORMAL_READOUT = 1
+"""The readouts' row that sums the normal load."""
 
 
 @njit(cache=True)
@@ -346,11 +347,11 @@ def flat_position(t: float, s: np.ndarray, reduction: Reduction) -> tuple[float,
     dx = flat[0] + flat[2] * (t - flat[1])
     if flat[5] == 0.0:
         return dx, flat[3]
-    row = reduction.readouts_M[_NORMAL]
-    known = dx * reduction.readouts_x[_NORMAL] + reduction.readouts_0[_NORMAL]
+    row = reduction.readouts_M[NORMAL_READOUT]
+    known = dx * reduction.readouts_x[NORMAL_READOUT] + reduction.readouts_0[NORMAL_READOUT]
     for j in range(s.size):
         known += row[j] * s[j]
-    return dx, (flat[4] - known) / reduction.readouts_y[_NORMAL]
+    return dx, (flat[4] - known) / reduction.readouts_y[NORMAL_READOUT]
 
 
 @njit(cache=True)
@@ -458,7 +459,8 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
     loads, _, _ = _loads(t, y, reduction, law)
     M, loads_y = reduction.loads_M, reduction.loads_y
     force = reduction.flat[5] != 0.0
-    normal_row, normal_y = reduction.readouts_M[_NORMAL], reduction.readouts_y[_NORMAL]
+    normal_row = reduction.readouts_M[NORMAL_READOUT]
+    normal_y = reduction.readouts_y[NORMAL_READOUT]
     packed = np.zeros((y.size, 2 * band + 1))
     by_slip = np.empty(c)
     by_states = np.empty(count)
@@ -549,6 +551,38 @@ def step_end(t: float, y: np.ndarray, reduction: Reduction, law: Law, force_scal
         for k in range(gaps.size):
             margin = min(margin, gaps[k] / gap_scale)
     return margin, speeds
+
+
+@njit(cache=True)
+def slip_rates(times: np.ndarray, ys: np.ndarray, reduction: Reduction, law: Law
+               ) -> np.ndarray:
+    """The closed nodes' slip rates at each of several states, as :func:`step_end`'s.
+
+    Parameters
+    ----------
+    times
+        (k,) the times.
+    ys
+        (k, size) the states.
+    reduction
+        The body reduced onto its closed nodes.
+    law
+        The friction law.
+
+    Returns
+    -------
+    numpy.ndarray
+        (k, closed nodes) the slip rates, in ``reduction.closed``'s order.
+    """
+    closed = reduction.closed
+    c = closed.size
+    out = np.empty((times.size, c))
+    for m in range(times.size):
+        loads, _, _ = _loads(times[m], ys[m], reduction, law)
+        for k in range(c):
+            out[m, k] = slip_speed(-loads[k], loads[c + k], state_part(ys[m], closed[k], law),
+                                   reduction.damping[closed[k]], law.a, law.v0)
+    return out
 
 
 @njit(cache=True)

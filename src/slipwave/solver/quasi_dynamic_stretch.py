@@ -2,12 +2,13 @@
 
 The driver (:mod:`slipwave.solver.quasi_dynamic`) hands a stretch to :func:`advance`,
 which takes BDF steps (:mod:`slipwave.solver.stiff_steps`) and records after each the
-loads and sensors at the sample times it passed and the nodes whose slip rate crossed
-the front speed, until the next field time is passed, the contact must change or the
-crossings' buffer is full; the driver then does what needs the whole body (the fields,
-the contact's change) and hands the stretch back. A step's Python dispatch (the
-stepper's, the reduction's and the law's arrays unboxed at every call) cost as much as
-a third of the step.
+loads and sensors at the sample times it passed, the state at the field times it passed
+and the nodes whose slip rate crossed the front speed, until the contact must change, a
+buffer is full or the run ends; the driver then does what needs the whole body (the
+fields of the states held, the contact's change) and hands the stretch back. A step's
+Python dispatch (the stepper's, the reduction's and the law's arrays unboxed at every
+call) cost as much as a third of the step, and a return to Python at each field time
+half of a coarse mesh's run.
 """
 
 from __future__ import annotations
@@ -22,11 +23,11 @@ from slipwave.solver.stiff_steps import BOUND, OK, T_OLD, Stepper, T, interpolat
 
 PASSED, CHANGES, FULL, TOO_SMALL = range(4)
 """What :func:`advance` returns: the time it was to pass is passed (or the end); the
-contact changes within the last step (not recorded); the crossings' buffer is full; a
-step fell below the smallest."""
+contact changes within the last step (not recorded); the crossings' or the field states'
+buffer is full; a step fell below the smallest."""
 
 # the places in Record.cursor
-NEXT_SAMPLE, CROSSINGS = range(2)
+NEXT_SAMPLE, CROSSINGS, NEXT_FIELD, FIELDS_HELD = range(4)
 
 
 class Record(NamedTuple):
@@ -40,8 +41,14 @@ class Record(NamedTuple):
         (readouts + 2, sample_times): the readouts, dx and dy at each (NaN until taken).
     crossing_node, crossing_time, crossing_rising
         The buffer of crossings: the node, the time, 1 where the slip rate rises.
+    field_times
+        The times of the fields.
+    field_states
+        (rows, state size): the buffer of states at the field times, the first held at
+        ``field_times[cursor[NEXT_FIELD] - cursor[FIELDS_HELD]]``.
     cursor
-        The next sample to take, the crossings held in the buffer.
+        The next sample to take, the crossings held in the buffer, the next field time
+        to take, the field states held in the buffer.
     speeds
         The closed nodes' slip rates at the last recorded step's end.
     """
@@ -51,6 +58,8 @@ class Record(NamedTuple):
     crossing_node: np.ndarray
     crossing_time: np.ndarray
     crossing_rising: np.ndarray
+    field_times: np.ndarray
+    field_states: np.ndarray
     cursor: np.ndarray
     speeds: np.ndarray
 
@@ -60,8 +69,9 @@ def record_step(stepper: Stepper, reduction: Reduction, law: Law, begin: float, 
                 after: np.ndarray, front_speed: float, record: Record) -> None:
     """Record a step from ``begin`` to ``end`` from its interpolant.
 
-    The samples that fall in it; the closed nodes whose slip rate crossed
-    ``front_speed``, each at the time interpolated in the logarithm of the rate.
+    The samples that fall in it; the states at the field times that do, as many as the
+    buffer has room for; the closed nodes whose slip rate crossed ``front_speed``, each
+    at the time interpolated in the logarithm of the rate.
 
     Parameters
     ----------
@@ -86,6 +96,13 @@ def record_step(stepper: Stepper, reduction: Reduction, law: Law, begin: float, 
         record.samples[:, first:stop] = readouts(chosen, interpolate(stepper, chosen),
                                                  reduction, law)
         cursor[NEXT_SAMPLE] = stop
+    fields, held = cursor[NEXT_FIELD], cursor[FIELDS_HELD]
+    stop = min(np.searchsorted(record.field_times, end, side="right"),
+               fields + record.field_states.shape[0] - held)
+    if stop > fields:
+        record.field_states[held:held + stop - fields] = interpolate(
+            stepper, record.field_times[fields:stop]).T
+        cursor[NEXT_FIELD], cursor[FIELDS_HELD] = stop, held + stop - fields
     before = record.speeds
     for k in range(after.size):
         was, now = abs(before[k]), abs(after[k])
@@ -134,7 +151,8 @@ def advance(stepper: Stepper, reduction: Reduction, law: Law, band: int, force_s
     sc = stepper.scalars
     room = record.crossing_node.size - reduction.closed.size  # a step's crossings fit
     while True:
-        if record.cursor[CROSSINGS] > room:
+        if (record.cursor[CROSSINGS] > room
+                or record.cursor[FIELDS_HELD] == record.field_states.shape[0]):
             return FULL
         if step(stepper, reduction, law, band) != OK:
             return TOO_SMALL
@@ -143,5 +161,5 @@ def advance(stepper: Stepper, reduction: Reduction, law: Law, band: int, force_s
         if margin < -1.0:
             return CHANGES
         record_step(stepper, reduction, law, sc[T_OLD], end, after, front_speed, record)
-        if end >= until or end >= sc[BOUND]:  # past the last field time, the run ends
+        if end >= until or end >= sc[BOUND]:
             return PASSED

@@ -96,6 +96,9 @@ class Stepper(NamedTuple):
         (size,): the absolute tolerances.
     counts
         Steps, evaluations of the right-hand side, Jacobians, factorisations.
+    error
+        (size,): the last step's local error estimate of each entry, in units of its
+        tolerance (the step passed with their RMS at most 1), as LSODE's ACOR scaled.
     """
 
     D: np.ndarray
@@ -104,6 +107,7 @@ class Stepper(NamedTuple):
     scalars: np.ndarray
     atol: np.ndarray
     counts: np.ndarray
+    error: np.ndarray
 
 
 @njit(cache=True)
@@ -380,7 +384,8 @@ def start(t0: float, y0: np.ndarray, t_bound: float, rtol: float, atol: np.ndarr
     counts[EVALUATIONS] = 2
     counts[JACOBIANS] = 1
     return Stepper(D, jacobian(t0, y0, reduction, law, band),
-                   factors_for(size, band, 1 + law.b.size), scalars, atol, counts)
+                   factors_for(size, band, 1 + law.b.size), scalars, atol, counts,
+                   np.zeros(size))
 
 
 @njit(cache=True)
@@ -475,7 +480,8 @@ def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
             continue
         safety = 0.9 * (2 * _NEWTON_ITERATIONS + 1) / (2 * _NEWTON_ITERATIONS + iterations)
         scale = atol + rtol * np.abs(y_new)
-        error_norm = _norm(_ERROR_CONSTANT[order] * d / scale)
+        error = _ERROR_CONSTANT[order] * d / scale
+        error_norm = _norm(error)
         if error_norm > 1:
             factor = max(_MIN_FACTOR, safety * error_norm ** (-1.0 / (order + 1)))
             h_abs *= factor
@@ -484,6 +490,7 @@ def step(s: Stepper, reduction: Reduction, law: Law, band: int) -> int:
             lu_valid = False  # scipy keeps it; its c has changed
             continue
         break
+    s.error[:] = error
     s.counts[STEPS] += 1
     sc[_JAC_AGE] += 1
     sc[_EQUAL] += 1
