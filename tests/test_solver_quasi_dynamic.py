@@ -328,6 +328,26 @@ def test_a_full_buffer_of_field_states_loses_no_field(monkeypatch: pytest.Monkey
                                    atol=1e-12 * np.abs(expected).max())
 
 
+def test_the_stepper_keeps_the_error_its_last_step_passed_with(monkeypatch: pytest.MonkeyPatch
+                                                               ) -> None:
+    # Stepper.error: each entry's local error in units of its tolerance, whose RMS a step
+    # passes at 1 or less (written at every step: never the zeros it starts with)
+    advance = qd.stretch_steps.advance
+    seen: list[np.ndarray] = []
+
+    def watched(stepper: stiff_steps.Stepper, *rest: object) -> int:
+        status = advance(stepper, *rest)
+        if stepper.counts[stiff_steps.STEPS]:
+            seen.append(stepper.error.copy())
+        return status
+
+    monkeypatch.setattr(qd.stretch_steps, "advance", watched)
+    qd.simulate_quasi_dynamic(qd.slab_body(Slab(elements=40)), SLAB_LAW, qd.Drive(76.0, 0.048),
+                              duration=50.0, sample_rate=20.0)
+    norms = np.array([np.sqrt(np.mean(error**2)) for error in seen])
+    assert len(seen) > 5 and (norms <= 1.0).all() and (norms > 0.0).all()
+
+
 def _crossings(x: np.ndarray, nodes: np.ndarray, rises: np.ndarray, falls: np.ndarray
                ) -> xr.Dataset:
     """A made-up simulation with these slip intervals."""
