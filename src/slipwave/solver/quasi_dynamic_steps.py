@@ -511,6 +511,19 @@ def jacobian(t: float, y: np.ndarray, reduction: Reduction, law: Law, band: int
 
 
 @njit(cache=True)
+def _closed_speeds(loads: np.ndarray, y: np.ndarray, reduction: Reduction, law: Law
+                   ) -> np.ndarray:
+    """The closed nodes' slip rates under their loads ``[r_x, r_y]`` at state y."""
+    closed = reduction.closed
+    c = closed.size
+    speeds = np.empty(c)
+    for k in range(c):
+        speeds[k] = slip_speed(-loads[k], loads[c + k], state_part(y, closed[k], law),
+                               reduction.damping[closed[k]], law.a, law.v0)
+    return speeds
+
+
+@njit(cache=True)
 def step_end(t: float, y: np.ndarray, reduction: Reduction, law: Law, force_scale: float,
              gap_scale: float) -> tuple[float, np.ndarray]:
     """What the driver reads at a step's end: the contact's margin, the slip rates.
@@ -539,11 +552,9 @@ def step_end(t: float, y: np.ndarray, reduction: Reduction, law: Law, force_scal
     c = closed.size
     loads, dx, dy = _loads(t, y, reduction, law)
     margin = np.inf
-    speeds = np.empty(c)
     for k in range(c):
         margin = min(margin, loads[c + k] / force_scale)
-        speeds[k] = slip_speed(-loads[k], loads[c + k], state_part(y, closed[k], law),
-                               reduction.damping[closed[k]], law.a, law.v0)
+    speeds = _closed_speeds(loads, y, reduction, law)
     if reduction.gaps_x.size:
         gaps = np.empty(reduction.gaps_x.size)
         _affine(reduction.gaps_M, reduction.gaps_x, reduction.gaps_y, reduction.gaps_0,
@@ -574,14 +585,10 @@ def slip_rates(times: np.ndarray, ys: np.ndarray, reduction: Reduction, law: Law
     numpy.ndarray
         (k, closed nodes) the slip rates, in ``reduction.closed``'s order.
     """
-    closed = reduction.closed
-    c = closed.size
-    out = np.empty((times.size, c))
+    out = np.empty((times.size, reduction.closed.size))
     for m in range(times.size):
-        loads, _, _ = _loads(times[m], ys[m], reduction, law)
-        for k in range(c):
-            out[m, k] = slip_speed(-loads[k], loads[c + k], state_part(ys[m], closed[k], law),
-                                   reduction.damping[closed[k]], law.a, law.v0)
+        out[m] = _closed_speeds(_loads(times[m], ys[m], reduction, law)[0], ys[m], reduction,
+                                law)
     return out
 
 
