@@ -1,4 +1,4 @@
-"""The features' emulator: features some runs lack."""
+"""The features' emulator: features some runs lack, its predictions, warm refits."""
 
 from __future__ import annotations
 
@@ -34,3 +34,32 @@ def test_a_feature_too_few_runs_have_stands_at_its_absent_value() -> None:
                        absent=np.array([np.nan, 1.0]))
     means, _ = emulator.predict(points[MIN_VALUES - 1:])
     np.testing.assert_allclose(means[:, 1], 1.0, atol=0.1)
+
+
+def test_the_emulator_predicts_what_its_processes_predict() -> None:
+    """Its own prediction (sklearn's without the checks) is sklearn's, to the last bit."""
+    rng = np.random.default_rng(5)
+    points = rng.random((25, 2))
+    features = np.column_stack([np.sin(3.0 * points[:, 0]) + points[:, 1] ** 2,
+                                points[:, 0] * points[:, 1] + rng.normal(0.0, 0.01, 25)])
+    emulator = emulate(points, features, BOX, loglik_of, seed=0)
+    queries = rng.random((7, 2))
+    means, variances = emulator.predict(queries)
+    for k, process in enumerate(emulator.processes):
+        mean, sd = process.predict(queries, return_std=True)
+        assert np.array_equal(means[:, k], mean) and np.array_equal(variances[:, k], sd**2)
+
+
+def test_a_warm_refit_starts_once_from_the_last_fit_and_predicts_as_a_fresh_one() -> None:
+    rng = np.random.default_rng(6)
+    points = rng.random((32, 2))
+    features = np.column_stack([np.sin(3.0 * points[:, 0]) + points[:, 1] ** 2,
+                                np.exp(points[:, 1])])
+    first = emulate(points[:28], features[:28], BOX, loglik_of, seed=0)
+    warm = emulate(points, features, BOX, loglik_of, seed=1, previous=first)
+    fresh = emulate(points, features, BOX, loglik_of, seed=1)
+    assert all(process.n_restarts_optimizer == 0 for process in warm.processes)
+    assert all(process.n_restarts_optimizer > 0 for process in fresh.processes)
+    queries = rng.random((50, 2))
+    np.testing.assert_allclose(warm.predict(queries)[0], fresh.predict(queries)[0],
+                               atol=0.01)

@@ -95,8 +95,8 @@ def built(tmp_path_factory):
     setup = read_test_setup(recording, {"test_id": "v", "youngs_modulus_mpa": "7",
                                         "poisson_ratio": "0.48", "edge_reference": "frame"})
     fit = fit_test(setup, measured_events(recording), FitSettings.from_values(
-        {"elements": 24, "members": 2, "stages": 1, "design": 2, "acquisitions": 1,
-         "refinements": 0, "samples": 300, "predictive_members": 3, "mesh_check": True}),
+        {"elements": 24, "members": 2, "design": 3, "refinements": 0, "samples": 300,
+         "predictive_members": 3, "mesh_check": True}),
         laws=["coulomb"])
     replay = replay_test(setup, chosen_law(fit), min_drop=0.3, elements=24)
     table = detect_events(recording, gross_edge_ratio=replay.recording.attrs["gross_edge_ratio"])

@@ -33,9 +33,8 @@ SMALL_MAP = ("map:\n  height_ratios: [0.25, 0.5]\n  frictions: [0.4, 1.0, 0.2]\n
 # and each test's fit is Coulomb's alone, a short search (the full fit is benchmarked), on
 # the fit's default mesh, without the search again at twice it (tests/test_report.py runs
 # it through to the page)
-SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  stages: 2\n"
-             "  design: 3\n  acquisitions: 1\n  refinements: 1\n  predictive_members: 3\n"
-             "  mesh_check: false\n")
+SMALL_FIT = ("fit:\n  laws: [coulomb]\n  elements: 80\n  members: 2\n  design: 4\n"
+             "  refinements: 2\n  predictive_members: 3\n  mesh_check: false\n")
 # and each filmed test's quasi-dynamic run on a coarse mesh (the converged 320 elements'
 # time is benchmarked in benchmarks/bench_quasi_dynamic.py)
 SMALL_WAVES = "simulate_waves:\n  elements: 40\n"

@@ -146,8 +146,8 @@ def fit_options(wildcards):
     return " ".join(
         f"--{key.replace('_', '-')} {config['fit'][key]}"
         for key in ("members", "stiffness_error", "speed_error", "step_jitter",
-                    "ratio_error", "time_error_s", "stages", "design", "acquisitions",
-                    "refinements", "exploration", "samples", "predictive_members", "seed")
+                    "ratio_error", "time_error_s", "design", "refinements", "samples",
+                    "predictive_members", "seed")
     )
 
 

@@ -8,8 +8,9 @@ A package split by job:
 - :mod:`~slipwave.fit.ensemble`: K simulations per guess over what the recording does
   not fix (calibration, normal load, stiffness, speed, noise, the cycle's start);
 - :mod:`~slipwave.fit.likelihood`: the Gaussian synthetic likelihood (Wood 2010);
-- :mod:`~slipwave.fit.search`: each law's posterior, from a Gaussian-process surrogate
-  of that likelihood sampled by emcee, and its evidence;
+- :mod:`~slipwave.fit.law_search`: each law's posterior, from Gaussian-process
+  emulators of its ensemble's features (:mod:`~slipwave.fit.emulator`) sampled by
+  emcee, and its evidence (:mod:`~slipwave.fit.search`);
 - :mod:`~slipwave.fit.procedure`: a test's laws fitted, the law of highest evidence
   chosen, its posterior predictive checked feature by feature, its mesh checked;
 - :mod:`~slipwave.fit.output`: ``fit.json`` read back.

@@ -1,8 +1,9 @@
 """A posterior from Gaussian processes of a simulator's features, for a thin likelihood.
 
 Where the simulator is nearly deterministic and its features nearly exact (a quasi-dynamic
-run's cycle repeats to 10⁻⁴ in T/|N| from window to window), the likelihood is a thin
-ridge through the parameters: fewer features than parameters, each known to its floor.
+run's cycle repeats to 10⁻⁴ in T/|N| from window to window; a slip-weakening slab's first
+slip moves by tens of its standard errors when Dc changes by a third), the likelihood is
+a thin ridge or needle through the parameters, each feature known to its floor.
 A process of the log-likelihood (:class:`slipwave.fit.search.Surrogate`) must then find a
 needle with a few dozen guesses. The features themselves vary smoothly over the prior, so
 here each is emulated by its own Gaussian process (Wilkinson 2014, "Accelerating ABC
@@ -20,6 +21,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.spatial.distance import cdist
 from sklearn.gaussian_process import GaussianProcessRegressor
 
 from slipwave.errors import SlipwaveError
@@ -66,7 +69,7 @@ class FeatureEmulator:
             Each of shape (n, features).
         """
         unit = scaled(np.atleast_2d(points), self.box)
-        predicted = [process.predict(unit, return_std=True) for process in self.processes]
+        predicted = [_predicted(process, unit) for process in self.processes]
         means = np.column_stack([mean for mean, _ in predicted])
         spreads = np.column_stack([sd for _, sd in predicted])
         return means, spreads**2
@@ -87,6 +90,31 @@ class FeatureEmulator:
         return self.loglik_of(*self.predict(points))
 
 
+def _predicted(process: GaussianProcessRegressor, unit: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """A fitted process's mean and standard deviation at points, as its ``predict`` gives.
+
+    The same operations, in the same order, as scikit-learn's ``predict(...,
+    return_std=True)`` for :func:`~slipwave.fit.search.gaussian_process`'s kernel (a
+    constant times an RBF, plus white noise) fitted to one output with ``normalize_y``,
+    without its checks of the input and its kernel objects' calls, which took four
+    fifths of an emulated likelihood's time inside emcee (its walkers call it thousands
+    of times on arrays already checked).
+    """
+    scaled_rbf, white = process.kernel_.k1, process.kernel_.k2
+    constant, length_scale = scaled_rbf.k1.constant_value, scaled_rbf.k2.length_scale
+    distances = cdist(unit / length_scale, process.X_train_ / length_scale,
+                      metric="sqeuclidean")
+    trans = np.full(distances.shape, constant) * np.exp(-0.5 * distances)
+    mean = process._y_train_std * (trans @ process.alpha_) + process._y_train_mean
+    v = solve_triangular(process.L_, trans.T, lower=True, check_finite=False)
+    variance = (np.full(unit.shape[0], constant) * np.ones(unit.shape[0])
+                + np.full(unit.shape[0], white.noise_level))
+    variance -= np.einsum("ij,ji->i", v.T, v)
+    variance[variance < 0.0] = 0.0
+    return mean, np.sqrt(variance * process._y_train_std**2)
+
+
 MIN_VALUES = 3
 """Runs with a value of a feature that its process learns from, at least; with fewer, the
 runs lacking it take the feature's ``absent`` value."""
@@ -94,7 +122,8 @@ runs lacking it take the feature's ``absent`` value."""
 
 def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
             loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], seed: int,
-            absent: np.ndarray | None = None) -> FeatureEmulator:
+            absent: np.ndarray | None = None, previous: FeatureEmulator | None = None
+            ) -> FeatureEmulator:
     """Fit one Gaussian process per feature (:func:`~slipwave.fit.search.gaussian_process`).
 
     Parameters
@@ -112,6 +141,10 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
     absent
         One per feature: the value a run lacking the feature takes where fewer than
         :data:`MIN_VALUES` runs have it (NaN, the default: the feature is never lacked).
+    previous
+        The emulator fitted to fewer of these runs: each process's optimiser starts once,
+        from its hyperparameters (a warm start), rather than from the defaults and
+        random restarts.
 
     Returns
     -------
@@ -133,8 +166,9 @@ def emulate(points: np.ndarray, features: np.ndarray, box: np.ndarray,
             raise SlipwaveError(f"feature {index} has {known.sum()} values of "
                                 f"{len(column)} runs: too few to emulate it")
         # a nearly deterministic simulator: its noise may be far below the likelihood's
+        start = None if previous is None else previous.processes[index].kernel_
         processes.append(gaussian_process(scaled(points[known], box), column[known], seed,
-                                          noise=(1e-3, (1e-8, 1e0))))
+                                          noise=(1e-3, (1e-8, 1e0)), start=start))
     return FeatureEmulator(tuple(processes), box, loglik_of)
 
 
@@ -172,14 +206,15 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
                     loglik_of: Callable[[np.ndarray, np.ndarray], np.ndarray], *,
                     design: int, refinements: int, samples: int, seed: int,
                     absent: np.ndarray | None = None,
-                    progress: Callable[[str], None] | None = None
+                    progress: Callable[[str], None] | None = None,
+                    batch: int = ACQUISITION_BATCH, warm: bool = False
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, FeatureEmulator]:
     """A posterior from an emulator of the features, its guesses drawn from its posterior.
 
     A Latin hypercube of the prior (``design`` points per coordinate); then batches of
-    :data:`~slipwave.fit.search.ACQUISITION_BATCH` guesses drawn from the emulator's
-    posterior, the emulator refitted after each (``refinements`` per coordinate); then
-    emcee on prior x exp(emulated log-likelihood).
+    ``batch`` guesses drawn from the emulator's posterior, the emulator refitted after
+    each (``refinements`` per coordinate); then emcee on prior x exp(emulated
+    log-likelihood).
 
     Parameters
     ----------
@@ -205,6 +240,11 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
         As :func:`emulate`'s.
     progress
         Called with a line after each batch.
+    batch
+        Guesses drawn per refit of the emulator.
+    warm
+        Each refit starts its processes' optimisers from the last fit's
+        hyperparameters (:func:`emulate`'s ``previous``), not afresh.
 
     Returns
     -------
@@ -245,23 +285,27 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
     points = draw(design * dimensions, seed)
     features = np.asarray(simulate(points), dtype=float)
 
+    last: list[FeatureEmulator] = []
+
     def fitted(round_: int) -> FeatureEmulator:
         finite = np.isfinite(features[:, 0])
         if finite.sum() < dimensions + 2:
             raise SlipwaveError(f"{finite.sum()} of {len(points)} guesses have features (the "
                                 "simulations failed): too few to emulate them")
-        return emulate(points[finite], features[finite], box, loglik_of, seed + round_,
-                       absent)
+        emulator = emulate(points[finite], features[finite], box, loglik_of, seed + round_,
+                           absent, last[-1] if warm and last else None)
+        last.append(emulator)
+        return emulator
 
     def made() -> np.ndarray:
         return points[np.isfinite(features[:, 0])]
 
     say(f"design: {len(points)} guesses")
-    for round_ in range(0, refinements * dimensions, ACQUISITION_BATCH):
+    for round_ in range(0, refinements * dimensions, batch):
         emulator = fitted(round_)
         draws = emulated_posterior(emulator, made(), inside, samples=200,
                                    seed=int(rng.integers(2**31)))
-        chosen = draws[rng.choice(draws.shape[0], ACQUISITION_BATCH, replace=False)]
+        chosen = draws[rng.choice(draws.shape[0], batch, replace=False)]
         points = np.vstack([points, chosen])
         features = np.vstack([features, np.asarray(simulate(chosen), dtype=float)])
         say(f"refinements: {len(points)} guesses, the emulator's best log-likelihood "

@@ -22,6 +22,8 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -195,6 +197,47 @@ def pooled_logliks(observed: np.ndarray, runs: list[np.ndarray], covariance: np.
     return out
 
 
+def emulated_logliks(observed: np.ndarray, means: np.ndarray, variances: np.ndarray,
+                     covariance: np.ndarray, measurement_error: np.ndarray) -> np.ndarray:
+    """The synthetic log-likelihood of emulated features.
+
+    log N(observed; mean, covariance + diag(variance + measurement_error^2)) at each
+    point: the emulator's variance of a guess's mean stands for the ensemble's Sigma / K
+    and for what the emulator has not seen.
+
+    Parameters
+    ----------
+    observed
+        The measured feature vector.
+    means, variances
+        The emulated features' means and variances, shape (n, features).
+    covariance
+        The scatter of one member (:func:`pooled_covariance`).
+    measurement_error
+        The measured features' standard errors (with the model's, in quadrature).
+
+    Returns
+    -------
+    numpy.ndarray
+        One log-likelihood per point.
+
+    Examples
+    --------
+    >>> rate = emulated_logliks(np.zeros(2), np.array([[0.0, 0.0], [0.3, 0.0]]),
+    ...                         np.zeros((2, 2)), np.eye(2) * 0.01, np.full(2, 0.0))
+    >>> (rate[0] - rate[1]).round(6).item()
+    4.5
+    """
+    means = np.atleast_2d(means)
+    totals = covariance[None, :, :] + np.einsum(
+        "ij,nj->nij", np.eye(observed.size), variances + np.asarray(measurement_error)**2)
+    factors = np.linalg.cholesky(totals)
+    scaled = np.linalg.solve(factors, (observed[None, :] - means)[:, :, None])[:, :, 0]
+    log_determinant = 2.0 * np.log(np.diagonal(factors, axis1=1, axis2=2)).sum(axis=1)
+    return -0.5 * ((scaled**2).sum(axis=1) + log_determinant
+                   + observed.size * np.log(2.0 * np.pi))
+
+
 class SyntheticLikelihood:
     """A test's synthetic likelihood: the runs' log-likelihoods, their scatter pooled.
 
@@ -241,3 +284,26 @@ class SyntheticLikelihood:
         error = (self.measurement_error if model_error is None
                  else np.hypot(self.measurement_error, model_error))
         return pooled_logliks(self.observed, runs, covariance, error)
+
+    def emulated(self, runs: list[np.ndarray], model_error: np.ndarray | None = None
+                 ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """The log-likelihood of emulated features, the scatter pooled over every run.
+
+        Parameters
+        ----------
+        runs
+            Each guess's members, shape (K_i, features).
+        model_error
+            As in :meth:`__call__`.
+
+        Returns
+        -------
+        callable
+            ``(means, variances) -> log-likelihoods`` (:func:`emulated_logliks`).
+
+        """
+        covariance = pooled_covariance(runs)
+        error = (self.measurement_error if model_error is None
+                 else np.hypot(self.measurement_error, model_error))
+        return partial(emulated_logliks, self.observed, covariance=covariance,
+                       measurement_error=error)

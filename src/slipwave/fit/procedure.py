@@ -1,7 +1,7 @@
 """A test's fit: each law's posterior, the law chosen by its evidence, its predictive check.
 
 :func:`fit_test` runs the laws in order (Coulomb first: the richer laws search around
-its posterior), each by :func:`~slipwave.fit.search.search_law` on the test's synthetic
+its posterior), each by :func:`~slipwave.fit.law_search.search_law` on the test's synthetic
 likelihood (:mod:`slipwave.fit.ensemble`, :mod:`slipwave.fit.likelihood`). The law of
 highest evidence is chosen; its posterior predictive (:func:`predictive_check`) says
 feature by feature whether the measurement lies within the spread of the law's
@@ -11,6 +11,7 @@ parameters still follow the mesh.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
@@ -36,6 +37,7 @@ from slipwave.fit.features import (
     measured_split,
     measurement_error,
 )
+from slipwave.fit.law_search import posterior_box, search_law
 from slipwave.fit.laws import (
     LAWS,
     PRIORS,
@@ -44,10 +46,9 @@ from slipwave.fit.laws import (
     ZONE_ELEMENTS,
     law_of,
     prior_bounds,
-    to_coordinates,
 )
 from slipwave.fit.likelihood import SyntheticLikelihood
-from slipwave.fit.search import Posterior, SearchSettings, search_law
+from slipwave.fit.search import Posterior, SearchSettings
 from slipwave.setup import TestSetup
 from slipwave.solver import Coulomb, SlipWeakening, SolverCache
 
@@ -112,10 +113,8 @@ class FitSettings:
                    nuisances=Nuisances(float(v["load_calibration"]), float(v["stiffness_error"]),
                                        float(v["speed_error"]), float(v["step_jitter"])),
                    ratio_error=float(v["ratio_error"]), time_error=float(v["time_error_s"]),
-                   search=SearchSettings(int(v["stages"]), int(v["design"]),
-                                         int(v["acquisitions"]), int(v["refinements"]),
-                                         float(v["exploration"]), int(v["samples"]),
-                                         int(v["seed"])),
+                   search=SearchSettings(int(v["design"]), int(v["refinements"]),
+                                         int(v["samples"]), int(v["seed"])),
                    predictive_members=int(v["predictive_members"]),
                    mesh_check=bool(v["mesh_check"]))
 
@@ -290,8 +289,7 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
     """The chosen law's posterior predictive against the measured features.
 
     ``members`` simulations, each with parameters drawn from the posterior and its own
-    nuisances (:func:`~slipwave.fit.ensemble.draw_members`), carried to the finer mesh as
-    the likelihood carried them (the posterior's ``model_shift``); a feature agrees when
+    nuisances (:func:`~slipwave.fit.ensemble.draw_members`); a feature agrees when
     the measurement lies within z standard deviations of their mean, the spread of the
     simulations, the measurement's own error and the mesh's (the posterior's
     ``model_error``) in quadrature (ASME V&V 20's validation uncertainty), z Bonferroni's for
@@ -328,8 +326,6 @@ def predictive_check(ensemble: Ensemble, posterior: Posterior, members: int, see
             row = ensemble.member_vector(posterior.law, law_params, member)
         except SlipwaveError:
             continue
-        if posterior.model_shift is not None:
-            row = row + posterior.model_shift(to_coordinates(posterior.law, law_params))[0]
         rows.append(row)
     simulated = np.array(rows)
     z = band_z(len(FEATURES))
@@ -631,8 +627,7 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
                          "ratio_error": settings.ratio_error,
                          "time_error_s": settings.time_error,
                          **{key: getattr(settings.search, key) for key in (
-                             "stages", "design", "acquisitions", "refinements",
-                             "exploration", "samples", "seed")}},
+                             "design", "refinements", "samples", "seed")}},
             "predictive": predictive,
             "mesh_check": finer}
 
@@ -709,10 +704,11 @@ def simulated_law(setup: TestSetup, posterior: Posterior, elements: int,
 
 def mesh_check(fitted: TestFit, posterior: Posterior, settings: FitSettings
                ) -> dict[str, Any]:
-    """The chosen law searched again at twice the mesh, within its posterior's box.
+    """The chosen law searched again at twice the mesh, about its posterior.
 
-    One stage of the search (:func:`~slipwave.fit.search.search_law`) over the box the
-    posterior ended in, on the fit's finer ensemble (the same members, the same
+    The search's design alone (:func:`~slipwave.fit.law_search.search_law`, no
+    refinements) over the posterior's range widened (:func:`~slipwave.fit.law_search.
+    posterior_box`), on the fit's finer ensemble (the same members, the same
     measured features and edge threshold). A law with a length scale (slip-weakening's
     Dc) converges once its process zone spans a few elements; Coulomb's law with
     fs > fd and run-in have none, and their coefficients are the mesh-dependent limit
@@ -739,15 +735,13 @@ def mesh_check(fitted: TestFit, posterior: Posterior, settings: FitSettings
     ensemble = fitted.fine
     elements, setup = ensemble.elements, ensemble.setup
     before = ensemble.simulations
-    local = SearchSettings(stages=1, design=settings.search.design,
-                           acquisitions=settings.search.acquisitions, refinements=0,
-                           exploration=settings.search.exploration,
-                           samples=settings.search.samples, seed=settings.search.seed)
+    local = dataclasses.replace(settings.search, refinements=0)
     law = posterior.law
     values = {name: entry["value"] for name, entry in posterior.summary().items()}
     finer = search_law(law, partial(ensemble.features, law),
-                       SyntheticLikelihood(ensemble.observed, fitted.error), posterior.box,
-                       local, dc_per_excess=dc_per_excess(setup, elements))
+                       SyntheticLikelihood(ensemble.observed, fitted.error),
+                       posterior_box(posterior), local,
+                       dc_per_excess=dc_per_excess(setup, elements))
     summary = finer.summary()
     zone = setup.process_zone(law_of(law, values))
     return {"elements": elements, "law": law,

@@ -1,24 +1,23 @@
-"""The posterior of a law's parameters, from a surrogate of its synthetic likelihood.
+"""The search's shared parts: a law's posterior and evidence, samplers, surrogates.
 
 Each synthetic log-likelihood costs an ensemble of simulations
 (:mod:`slipwave.fit.ensemble`), so an MCMC cannot call it the thousands of times it
-needs. The search is Bayesian optimisation of a Gaussian-process surrogate, as BOLFI
-does (Gutmann and Corander 2016, JMLR 17:125): the log-likelihood is evaluated at a
-Latin hypercube over the law's search box (scipy's :mod:`scipy.stats.qmc`), a Gaussian
-process is fitted to it (scikit-learn's, with a white-noise term for the ensemble's own
-scatter), and more points are added where its upper confidence bound is highest (the
-mode), then where the posterior density's own uncertainty is largest (its extent), then
-where its posterior has mass. The posterior is the prior times the exponential of the
-surrogate's mean, sampled by emcee's affine-invariant ensemble sampler (Foreman-Mackey
-et al. 2013); a law's evidence is that posterior's normalising constant, estimated by
-importance sampling, and the laws are compared by it (Bayes factors: each law's prior
-volume is what penalises its extra parameters). ELFI's BOLFI itself is not used: its
-Gaussian processes come from GPy, which does not install with numpy 2.
+needs; it samples a model of it instead. A quasi-static law's model is an emulator of
+its features (:mod:`slipwave.fit.law_search`); the spring-slider's
+(:mod:`slipwave.fit.slider`) a Gaussian process of the log-likelihood itself, its guesses
+added where its upper confidence bound is highest (:func:`upper_bound_search`, BOLFI's
+scheme: Gutmann and Corander 2016, JMLR 17:125). Either is sampled by emcee's
+affine-invariant ensemble sampler (Foreman-Mackey et al. 2013, :func:`sample_posterior`);
+a law's evidence is that posterior's normalising constant, estimated by importance
+sampling (:func:`log_evidence`), and the laws are compared by it (Bayes factors: each
+law's prior volume is what penalises its extra parameters). The model's own error from
+the mesh is measured along the posterior (:func:`error_points`) and carried. ELFI's
+BOLFI itself is not used: its Gaussian processes come from GPy, which does not install
+with numpy 2.
 """
 
 from __future__ import annotations
 
-import time as clock
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -30,11 +29,10 @@ from scipy.special import logsumexp
 from scipy.stats import multivariate_normal, qmc
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, WhiteKernel
 
 from slipwave.errors import SlipwaveError
-from slipwave.fit.laws import LAWS, from_coordinates, prior_bounds, prior_mask
-from slipwave.fit.likelihood import ModelError
+from slipwave.fit.laws import LAWS, prior_bounds, prior_mask
 
 
 @dataclass(frozen=True)
@@ -43,19 +41,11 @@ class SearchSettings:
 
     Attributes
     ----------
-    stages
-        Zooming stages at most (:func:`search_law`).
     design
-        Points of each stage's Latin hypercube, per parameter.
-    acquisitions
-        Points added in each stage, per parameter: in the first where the surrogate's
-        upper confidence bound is highest, in the later ones where the posterior
-        density's own uncertainty is (:meth:`Surrogate.density_spread`).
+        Guesses of the Latin hypercube, per parameter
+        (:func:`~slipwave.fit.law_search.search_law`).
     refinements
-        Points added from the surrogate's posterior, per parameter.
-    exploration
-        The upper confidence bound's multiple of the surrogate's standard deviation
-        (the first stage's acquisitions).
+        Guesses drawn from the emulated posterior after it, per parameter.
     samples
         Posterior samples kept.
     seed
@@ -63,11 +53,8 @@ class SearchSettings:
 
     """
 
-    stages: int
     design: int
-    acquisitions: int
     refinements: int
-    exploration: float
     samples: int
     seed: int
 
@@ -95,9 +82,9 @@ class Posterior:
     model_error
         The features' error from the mesh the likelihood carried
         (:func:`~slipwave.fit.ensemble.mesh_error`), or None.
-    model_shift
-        What the likelihood added to the features to carry them to the finer mesh
-        (:class:`ModelShift`), or None.
+    model
+        The model of the log-likelihood the samples were drawn from (an emulator of the
+        features, :class:`~slipwave.fit.emulator.FeatureEmulator`), or None.
 
     """
 
@@ -109,8 +96,7 @@ class Posterior:
     box: np.ndarray
     seconds: float = 0.0
     model_error: np.ndarray | None = None
-    model_shift: ModelShift | None = field(default=None, repr=False)
-    surrogate: Surrogate | None = field(default=None, repr=False)
+    model: LogLikelihood | None = field(default=None, repr=False)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -231,38 +217,6 @@ class Surrogate:
         mean, sd = self._predicted(points)
         return self.top + 1.0 - np.exp(mean - exploration * sd)
 
-    def density_spread(self, points: np.ndarray) -> np.ndarray:
-        """The standard deviation of the unnormalised posterior density, exp(loglik - m).
-
-        Where the surrogate's uncertainty is both large and plausible: the posterior's
-        variance, the acquisition Järvenpää et al. (2019, Bayesian Analysis 14:595)
-        call MAXV, which maps a posterior rather than its mode (a ridge of equal
-        likelihood along its length). Exact for the process's normal prediction g of
-        the log distance, exp(loglik - m) = exp(1 - exp(g)), by Gauss-Hermite
-        quadrature (:data:`QUADRATURE` nodes).
-
-        Parameters
-        ----------
-        points
-            Shape (n, parameters).
-
-        Returns
-        -------
-        numpy.ndarray
-            One per point, between 0 and e.
-
-        """
-        mean, sd = self._predicted(points)
-        nodes, weights = np.polynomial.hermite.hermgauss(QUADRATURE)
-        weights = weights / np.sqrt(np.pi)
-        density = np.exp(1.0 - np.exp(mean[:, None] + np.sqrt(2.0) * sd[:, None] * nodes))
-        first, second = density @ weights, density**2 @ weights
-        return np.sqrt(np.maximum(second - first**2, 0.0))
-
-
-QUADRATURE = 16
-"""Gauss-Hermite nodes of :meth:`Surrogate.density_spread`."""
-
 
 def surrogate(points: np.ndarray, logliks: np.ndarray, box: np.ndarray, seed: int
               ) -> Surrogate:
@@ -291,8 +245,8 @@ def surrogate(points: np.ndarray, logliks: np.ndarray, box: np.ndarray, seed: in
 
 
 def gaussian_process(inputs: np.ndarray, outputs: np.ndarray, seed: int, *,
-                     noise: tuple[float, tuple[float, float]] = (1e-2, (1e-6, 1e1))
-                     ) -> GaussianProcessRegressor:
+                     noise: tuple[float, tuple[float, float]] = (1e-2, (1e-6, 1e1)),
+                     start: Kernel | None = None) -> GaussianProcessRegressor:
     """A Gaussian process fitted to outputs: a constant times an anisotropic RBF, plus noise.
 
     Parameters
@@ -305,21 +259,30 @@ def gaussian_process(inputs: np.ndarray, outputs: np.ndarray, seed: int, *,
         The optimiser's restarts' seed.
     noise
         The white noise's first value and its bounds, in the outputs' normalised variance.
+    start
+        A kernel of this form fitted before (to fewer of the same outputs): its
+        hyperparameters are the optimiser's one start, instead of the defaults and
+        :data:`RESTARTS` random ones.
 
     Returns
     -------
     sklearn.gaussian_process.GaussianProcessRegressor
         Fitted (its outputs normalised).
     """
-    kernel = (ConstantKernel(1.0, (1e-3, 1e3))
-              * RBF(np.full(inputs.shape[1], 0.3), (1e-2, 1e1))
-              + WhiteKernel(*noise))
-    process = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=2,
+    kernel = start if start is not None else (
+        ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(inputs.shape[1], 0.3), (1e-2, 1e1))
+        + WhiteKernel(*noise))
+    process = GaussianProcessRegressor(kernel, normalize_y=True,
+                                       n_restarts_optimizer=0 if start is not None else RESTARTS,
                                        random_state=seed)
     with warnings.catch_warnings():  # a length scale at its bound is an answer, not a fault
         warnings.simplefilter("ignore", ConvergenceWarning)
         process.fit(inputs, outputs)
     return process
+
+
+RESTARTS = 2
+"""Random starts of a process's optimiser besides its default hyperparameters."""
 
 
 MIN_STEPS = 300
@@ -578,7 +541,7 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
     return drawn, points, logliks
 
 
-def log_evidence(process: Surrogate, box: np.ndarray, law: str,
+def log_evidence(process: LogLikelihood, box: np.ndarray, law: str,
                  inside: Callable[[np.ndarray], np.ndarray], samples: np.ndarray, seed: int, *,
                  draws: int = 4000) -> float:
     """The log of the law's evidence: the prior's mean of exp(surrogate mean).
@@ -621,75 +584,6 @@ def log_evidence(process: Surrogate, box: np.ndarray, law: str,
     log_weights = np.full(draws, -np.inf)
     log_weights[keep] = process.loglik(x[keep]) - proposal.logpdf(x[keep])
     return float(logsumexp(log_weights) - np.log(draws) - log_volume)
-
-
-def ridge_ends(samples: np.ndarray, box: np.ndarray, reach: float) -> np.ndarray:
-    """Where a ridge of the posterior would continue: beyond its ends on its longest axis.
-
-    The draws' 0.5 and 99.5 % places on their longest axis (:func:`_longest_axis`, in
-    the box's unit cube), each moved outward by ``reach`` times the distance between
-    them.
-
-    Parameters
-    ----------
-    samples
-        Draws from the surrogate posterior, shape (draws, parameters).
-    box
-        The box they were drawn in.
-    reach
-        How far beyond each end, in lengths of the posterior along its axis.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (2, parameters), the search's coordinates (possibly outside the box).
-
-    Examples
-    --------
-    Draws along a diagonal of the unit square, 0.4 to 0.6: their 99 % range (0.401 to
-    0.599) reaches as far again each way.
-
-    >>> samples = np.column_stack([np.linspace(0.4, 0.6, 1001)] * 2)
-    >>> box = np.array([[0.0, 1.0], [0.0, 1.0]])
-    >>> ridge_ends(samples, box, 1.0).round(3).tolist()
-    [[0.203, 0.203], [0.797, 0.797]]
-    """
-    centre, axis = _longest_axis(samples, box)
-    along = (scaled(samples, box) - centre) @ axis
-    low, high = np.quantile(along, [0.005, 0.995])
-    length = high - low
-    unit = centre + np.outer([low - reach * length, high + reach * length], axis)
-    return box[:, 0] + unit * (box[:, 1] - box[:, 0])
-
-
-def _zoomed(samples: np.ndarray, best: np.ndarray, box: np.ndarray, bounds: np.ndarray
-            ) -> np.ndarray:
-    """The next stage's box: the posterior's 99 % range and the best guesses, widened.
-
-    The surrogate can be wrong where few guesses were made: the best guesses evaluated
-    stay inside, a box whose best guess lies at its edge reaches beyond it, and the box
-    reaches along the posterior's longest axis beyond its ends (:func:`ridge_ends`): a
-    posterior stretched along a ridge of equal likelihood (a slip-weakening law's fs
-    against its Dc) may go on past where the last stage's guesses saw it end, and the
-    next stage's guesses look there.
-    """
-    low, high = np.quantile(samples, [0.005, 0.995], axis=0)
-    ends = ridge_ends(samples, box, RIDGE_REACH)
-    low = np.minimum(np.minimum(low, best.min(axis=0)), ends.min(axis=0))
-    high = np.maximum(np.maximum(high, best.max(axis=0)), ends.max(axis=0))
-    span = np.maximum(high - low, MIN_SPAN * (bounds[:, 1] - bounds[:, 0]))
-    centre = 0.5 * (low + high)
-    zoomed = np.column_stack([centre - ZOOM * span, centre + ZOOM * span])
-    width = box[:, 1] - box[:, 0]
-    edge = EDGE * width
-    zoomed[:, 0] = np.where(best[0] <= box[:, 0] + edge, np.minimum(zoomed[:, 0],
-                                                                    box[:, 0] - 0.5 * width),
-                            zoomed[:, 0])
-    zoomed[:, 1] = np.where(best[0] >= box[:, 1] - edge, np.maximum(zoomed[:, 1],
-                                                                    box[:, 1] + 0.5 * width),
-                            zoomed[:, 1])
-    return np.column_stack([np.maximum(zoomed[:, 0], bounds[:, 0]),
-                            np.minimum(zoomed[:, 1], bounds[:, 1])])
 
 
 ERROR_QUANTILES = (0.05, 0.95)
@@ -750,255 +644,3 @@ def error_points(best: np.ndarray, spread: np.ndarray, box: np.ndarray) -> np.nd
         if not any(np.array_equal(point, kept) for kept in chosen):
             chosen.append(point)
     return np.array(chosen)
-
-
-@dataclass(frozen=True)
-class ModelShift:
-    """The model's mean error of the features along the posterior's longest axis.
-
-    Measured at a few points (:func:`error_points`), linear between their places on
-    the axis (:func:`_longest_axis` of the draws they were chosen from), the nearest
-    one's beyond them: on a ridge the mesh's error changes along it, and across it the
-    posterior is narrow.
-
-    Attributes
-    ----------
-    box
-        The search box the axis lies in.
-    centre, axis
-        The draws' centre and longest axis, in the box's unit cube.
-    along
-        The points' places on the axis, increasing.
-    shifts
-        The shift measured at each point, shape (points, features).
-
-    Examples
-    --------
-    >>> spread = np.column_stack([np.linspace(0.0, 1.0, 101), np.zeros(101)])
-    >>> box = np.array([[0.0, 1.0], [-1.0, 1.0]])
-    >>> points = np.array([[0.5, 0.0], [0.0, 0.0], [1.0, 0.0]])
-    >>> shift = ModelShift.measured(points, np.array([[0.1], [0.0], [0.2]]), spread, box)
-    >>> shift(np.array([[0.25, 0.0], [0.75, 0.5], [2.0, 0.0]])).round(3).ravel().tolist()
-    [0.05, 0.15, 0.2]
-    """
-
-    box: np.ndarray
-    centre: np.ndarray
-    axis: np.ndarray
-    along: np.ndarray
-    shifts: np.ndarray
-
-    @classmethod
-    def measured(cls, points: np.ndarray, shifts: np.ndarray, spread: np.ndarray,
-                 box: np.ndarray) -> ModelShift:
-        """The shift from its values at points chosen along the draws' longest axis.
-
-        Parameters
-        ----------
-        points
-            Where it was measured, shape (points, parameters), the search's coordinates.
-        shifts
-            What it measured there, shape (points, features).
-        spread
-            The draws the points were chosen along (:func:`error_points`).
-        box
-            The search box.
-
-        Returns
-        -------
-        ModelShift
-            Ready to evaluate anywhere.
-
-        """
-        centre, axis = _longest_axis(spread, box)
-        along = (scaled(points, box) - centre) @ axis
-        order = np.argsort(along, kind="stable")
-        return cls(box, centre, axis, along[order], np.asarray(shifts)[order])
-
-    def __call__(self, points: np.ndarray) -> np.ndarray:
-        """The shift at points.
-
-        Parameters
-        ----------
-        points
-            Shape (n, parameters), the search's coordinates.
-
-        Returns
-        -------
-        numpy.ndarray
-            Shape (n, features).
-
-        """
-        along = (scaled(np.atleast_2d(points), self.box) - self.centre) @ self.axis
-        return np.column_stack([np.interp(along, self.along, self.shifts[:, k])
-                                for k in range(self.shifts.shape[1])])
-
-
-ZOOM = 1.0
-"""A stage's box spans the previous posterior's 99 % range twice over (ZOOM each side of
-its centre): room for the surrogate to see the likelihood fall."""
-EDGE = 0.05
-"""A best guess within this share of the box's width from an edge: the box reaches half
-its width beyond that edge (within the prior)."""
-UNZOOMED = ("dc", "runin_slips")
-"""Parameters every stage searches over their first box. Each trades against fs along
-a ridge of equal likelihood (a slip-weakening law's peak load is reached from a lower
-fs over a longer Dc; a run-in's from a lower first fs rising faster), so the data fix fs
-given them but leave them loose: in a calibration test, one ridge from fs 0.78 at Dc
-0.05 mm to the true 0.61 at 0.2 mm, both ends of equal likelihood, and zooming onto the
-end the first guesses found cut off the other. fs's own zoom keeps the ridge's reach,
-which its posterior spans once the guesses lie along it."""
-RIDGE_REACH = 1.0
-"""How far a stage's box reaches beyond the posterior's ends along its longest axis, in
-lengths of the posterior along it (:func:`ridge_ends`)."""
-MIN_SPAN = 0.002
-"""The narrowest box, as a share of the prior's range in each coordinate."""
-SETTLED = 0.5
-"""The search stops zooming once no coordinate's box shrinks below this share of the
-previous stage's."""
-
-
-def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
-               loglik: Callable[[list[np.ndarray], np.ndarray, np.ndarray | None], np.ndarray],
-               box: np.ndarray, settings: SearchSettings, *, dc_per_excess: float = 0.0,
-               model_error: Callable[[Mapping[str, float]], ModelError] | None = None
-               ) -> Posterior:
-    """A law's posterior on a test, by a Gaussian-process surrogate of its likelihood.
-
-    In stages: a Latin hypercube over the box, points added at the surrogate's upper
-    confidence bound (the first stage) or where the posterior density is most uncertain
-    (:meth:`Surrogate.density_spread`, the later ones), then the box zoomed onto the
-    surrogate posterior's 99 % range (:data:`ZOOM`, :func:`_zoomed`; not in
-    :data:`UNZOOMED`), until it no longer shrinks (:data:`SETTLED`) or
-    ``settings.stages`` are done; last, points drawn from the surrogate's posterior,
-    the surrogate refitted after each. A posterior a fraction of a percent wide in a
-    box the prior's width could not be resolved by one stationary surrogate. With
-    ``model_error``, the model's own error of the features is measured after the first
-    stage at :func:`error_points` and carried by the likelihood from then on (every
-    log-likelihood is recomputed from the runs): its shift, interpolated along the
-    posterior's longest axis (:class:`ModelShift`), added to every member's features,
-    and its size (root mean square over the points) to the measurement's error.
-
-    Parameters
-    ----------
-    law
-        One of :data:`~slipwave.fit.laws.LAWS`.
-    simulate
-        The ensemble's feature vectors of the law's parameters (by name), shape
-        (members, features).
-    loglik
-        The synthetic log-likelihoods of runs of :func:`simulate`, given which of them
-        to pool the ensemble's scatter over (those near the box) and the model's error
-        (:class:`~slipwave.fit.likelihood.SyntheticLikelihood`).
-    box
-        Where to search first, shape (parameters, 2), in the prior's coordinates
-        (:func:`~slipwave.fit.laws.to_coordinates`); clipped to the prior's bounds.
-    settings
-        How far to search.
-    dc_per_excess
-        The shortest Dc the fit's mesh resolves per unit of fs - fd, mm
-        (:func:`~slipwave.fit.laws.in_prior`).
-    model_error
-        The features' error from the mesh at a guess (by name), or None.
-
-    Returns
-    -------
-    Posterior
-        Its samples and evidence, and the points evaluated.
-
-    Raises
-    ------
-    SlipwaveError
-        If fewer than two evaluated points have a finite likelihood (the solver
-        followed no law tried).
-
-    """
-    began = clock.perf_counter()
-    bounds = prior_bounds(law)
-    box = np.column_stack([np.maximum(box[:, 0], bounds[:, 0]),
-                           np.minimum(box[:, 1], bounds[:, 1])])
-    p = box.shape[0]
-    rng = np.random.default_rng(settings.seed)
-    points: list[np.ndarray] = []
-    runs: list[np.ndarray] = []
-    error: np.ndarray | None = None
-    shift: ModelShift | None = None
-
-    def evaluate(x: np.ndarray) -> None:
-        points.append(x)
-        runs.append(simulate(from_coordinates(law, x)))
-
-    def logliks(pool: np.ndarray) -> np.ndarray:
-        # every run scored with the model's error as measured so far
-        if shift is None:
-            return loglik(runs, pool, error)
-        moved = shift(np.array(points))
-        return loglik([run + moved[k] for k, run in enumerate(runs)], pool, error)
-
-    def near_box(box: np.ndarray) -> np.ndarray:
-        x = np.array(points)
-        margin = 0.5 * (box[:, 1] - box[:, 0])
-        return (np.all(x >= box[:, 0] - margin, axis=1)
-                & np.all(x <= box[:, 1] + margin, axis=1))
-
-    def fitted(box: np.ndarray) -> tuple[Surrogate, np.ndarray]:
-        # the surrogate over the points near the box, and the best of them
-        x = np.array(points)
-        near = near_box(box)
-        y = logliks(near)
-        near &= np.isfinite(y)
-        if near.sum() < 2:
-            raise SlipwaveError(f"the solver followed fewer than two {law} laws of "
-                                f"{len(values)} tried near {box.tolist()}: no likelihood "
-                                "to search")
-        process = surrogate(x[near], y[near], box, int(rng.integers(2**31)))
-        return process, x[near][np.argsort(y[near])[::-1][: max(2, p)]]
-
-    for stage in range(settings.stages):
-        inside = _inside(law, box, dc_per_excess)
-        for x in _fill(law, box, settings.design * p, rng, inside, latin=True):
-            evaluate(x)
-        for _ in range(settings.acquisitions * p):
-            process, _ = fitted(box)
-            candidates = _fill(law, box, 1024, rng, inside, latin=False)
-            # the first stage looks for the likelihood's mode, the later ones map the
-            # posterior about it
-            merit = (process.upper(candidates, settings.exploration) if stage == 0
-                     else process.density_spread(candidates))
-            evaluate(candidates[int(np.argmax(merit))])
-        if stage == 0 and model_error is not None:
-            process, best = fitted(box)
-            spread = sample_posterior(process, box, inside, best, samples=1000,
-                                      seed=int(rng.integers(2**31)))
-            at = error_points(best[0], spread, box)
-            measured = [model_error(from_coordinates(law, x)) for x in at]
-            error = np.sqrt(np.mean([m.error**2 for m in measured], axis=0))
-            shift = ModelShift.measured(at, np.array([m.shift for m in measured]), spread,
-                                        box)
-        if stage == settings.stages - 1:
-            break
-        process, best = fitted(box)
-        draws = sample_posterior(process, box, inside, best, samples=1000,
-                                 seed=int(rng.integers(2**31)))
-        zoomed = _zoomed(draws, best, box, bounds)
-        kept = np.array([name in UNZOOMED for name in LAWS[law]])
-        zoomed[kept] = box[kept]
-        shrink = (zoomed[:, 1] - zoomed[:, 0]) / (box[:, 1] - box[:, 0])
-        within = np.all((zoomed[:, 0] >= box[:, 0]) & (zoomed[:, 1] <= box[:, 1]))
-        if stage > 0 and within and np.all(shrink > SETTLED):
-            break
-        box = zoomed
-    inside = _inside(law, box, dc_per_excess)
-    process, best = fitted(box)
-    for _ in range(settings.refinements * p):
-        draws = sample_posterior(process, box, inside, best, samples=200,
-                                 seed=int(rng.integers(2**31)))
-        evaluate(draws[int(rng.integers(draws.shape[0]))])
-        process, best = fitted(box)
-    samples = sample_posterior(process, box, inside, best, samples=settings.samples,
-                               seed=int(rng.integers(2**31)))
-    evidence = log_evidence(process, box, law, inside, samples, int(rng.integers(2**31)))
-    natural = np.array([list(from_coordinates(law, row).values()) for row in samples])
-    values = logliks(near_box(box))
-    return Posterior(law, natural, evidence, np.array(points), values, box,
-                     clock.perf_counter() - began, error, shift, process)
