@@ -365,8 +365,8 @@ def test_an_edited_fit_of_many_elements_meets_the_memory_limit(made, out, capsys
 @pytest.mark.parametrize(("argv", "pattern"), [
     (["fit", "{rec_nc}", "-o", "{out}/f.json", "--members", "1"],
      r"argument --members: 1 is less than the minimum of 2"),
-    (["fit", "{rec_nc}", "-o", "{out}/f.json", "--stages", "-5"],
-     r"argument --stages: -5 is less than the minimum of 1"),
+    (["fit", "{rec_nc}", "-o", "{out}/f.json", "--design", "-5"],
+     r"argument --design: -5 is less than the minimum of 1"),
     (["fit", "{rec_nc}", "-o", "{out}/f.json", "--load-calibration", "-0.5"],
      r"argument --load-calibration: -0.5 is less than the minimum of 0"),
     (["fit", "{rec_nc}", "-o", "{out}/f.json", "--elements", "100000"],
