@@ -588,7 +588,7 @@ def log_evidence(process: LogLikelihood, box: np.ndarray, law: str,
 
 ERROR_QUANTILES = (0.05, 0.95)
 """Where along the posterior's longest axis the model's error is measured besides the
-best guess: these quantiles of the first stage's surrogate posterior."""
+best guess: these quantiles of the posterior's draws."""
 
 
 def _longest_axis(spread: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -608,7 +608,7 @@ def error_points(best: np.ndarray, spread: np.ndarray, box: np.ndarray) -> np.nd
     The error from the mesh changes along the posterior: on a slip-weakening law's
     fs-Dc ridge, measured at its best guess alone it missed a 4 % change of the
     recurrence at the truth (calibration test 3602-12), and the posterior excluded the
-    truth. Measured also at the surrogate posterior's draws nearest the
+    truth. Measured also at the posterior's draws nearest the
     :data:`ERROR_QUANTILES` of its longest axis (the first principal component, in the
     box's unit cube), the error's root mean square over the points is the discrepancy
     expected where the truth may lie, for three ensembles on the finer mesh.
@@ -618,7 +618,7 @@ def error_points(best: np.ndarray, spread: np.ndarray, box: np.ndarray) -> np.nd
     best
         The best guess, the search's coordinates.
     spread
-        Draws from the surrogate posterior, shape (draws, parameters).
+        Draws from the posterior, shape (draws, parameters).
     box
         The search box.
 
