@@ -285,24 +285,21 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
     points = draw(design * dimensions, seed)
     features = np.asarray(simulate(points), dtype=float)
 
-    last: list[FeatureEmulator] = []
-
-    def fitted(round_: int) -> FeatureEmulator:
+    def fitted(round_: int, previous: FeatureEmulator | None) -> FeatureEmulator:
         finite = np.isfinite(features[:, 0])
         if finite.sum() < dimensions + 2:
             raise SlipwaveError(f"{finite.sum()} of {len(points)} guesses have features (the "
                                 "simulations failed): too few to emulate them")
-        emulator = emulate(points[finite], features[finite], box, loglik_of, seed + round_,
-                           absent, last[-1] if warm and last else None)
-        last.append(emulator)
-        return emulator
+        return emulate(points[finite], features[finite], box, loglik_of, seed + round_,
+                       absent, previous if warm else None)
 
     def made() -> np.ndarray:
         return points[np.isfinite(features[:, 0])]
 
     say(f"design: {len(points)} guesses")
+    emulator: FeatureEmulator | None = None
     for round_ in range(0, refinements * dimensions, batch):
-        emulator = fitted(round_)
+        emulator = fitted(round_, emulator)
         draws = emulated_posterior(emulator, made(), inside, samples=200,
                                    seed=int(rng.integers(2**31)))
         chosen = draws[rng.choice(draws.shape[0], batch, replace=False)]
@@ -310,6 +307,6 @@ def emulator_search(simulate: Callable[[np.ndarray], np.ndarray], box: np.ndarra
         features = np.vstack([features, np.asarray(simulate(chosen), dtype=float)])
         say(f"refinements: {len(points)} guesses, the emulator's best log-likelihood "
             f"{float(np.max(emulator.loglik(points))):.1f}")
-    emulator = fitted(refinements * dimensions)
+    emulator = fitted(refinements * dimensions, emulator)
     drawn = emulated_posterior(emulator, made(), inside, samples=samples, seed=seed)
     return drawn, points, features, emulator

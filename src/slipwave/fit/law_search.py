@@ -19,18 +19,40 @@ import time as clock
 from collections.abc import Callable, Mapping
 
 import numpy as np
+from scipy.stats import qmc
 
+from slipwave.errors import SlipwaveError
 from slipwave.fit.emulator import emulated_posterior, emulator_search
-from slipwave.fit.laws import from_coordinates, prior_bounds, to_coordinates
+from slipwave.fit.laws import from_coordinates, prior_bounds, prior_mask, to_coordinates
 from slipwave.fit.likelihood import ModelError, SyntheticLikelihood
-from slipwave.fit.search import (
-    Posterior,
-    SearchSettings,
-    _fill,
-    _inside,
-    error_points,
-    log_evidence,
-)
+from slipwave.fit.search import Posterior, SearchSettings, error_points, log_evidence
+
+
+def _inside(law: str, box: np.ndarray, dc_per_excess: float
+            ) -> Callable[[np.ndarray], np.ndarray]:
+    """Which points (rows) lie in the box and the prior's support."""
+    def inside(x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(x)
+        return (np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
+                & prior_mask(law, x, dc_per_excess=dc_per_excess))
+    return inside
+
+
+def _fill(law: str, box: np.ndarray, count: int, rng: np.random.Generator,
+          inside: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """``count`` points of a Latin hypercube of the box that lie within the prior."""
+    found: list[np.ndarray] = []
+    for _ in range(50):
+        points = qmc.scale(qmc.LatinHypercube(d=box.shape[0], seed=rng).random(count),
+                           box[:, 0], box[:, 1])
+        found.extend(points[inside(points)])
+        if len(found) >= count:
+            break
+    if not found:
+        raise SlipwaveError(f"the {law} law's search box {box.tolist()} holds no point of its "
+                            "prior")
+    return np.array(found[:count])
+
 
 BATCH = 4
 """Guesses drawn from the emulated posterior per refit of the emulators. Each refit
@@ -136,7 +158,7 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
         return np.array([_guess_features(members) for members in made])
 
     def draw(count: int, seed: np.random.Generator | int) -> np.ndarray:
-        return _fill(law, box, count, np.random.default_rng(seed), inside, latin=True)
+        return _fill(law, box, count, np.random.default_rng(seed), inside)
 
     scored: dict[tuple[int, int], Callable[[np.ndarray, np.ndarray], np.ndarray]] = {}
 
@@ -148,13 +170,13 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
             scored[key] = likelihood.emulated(runs, carried["error"])
         return scored[key](means, variances)
 
-    samples, points, _, emulator = emulator_search(
+    samples, points, features_made, emulator = emulator_search(
         features, box, draw, inside, loglik_of, design=settings.design,
         refinements=settings.refinements, samples=settings.samples, seed=settings.seed,
         batch=BATCH, warm=True)
     rng = np.random.default_rng(settings.seed)
     if model_error is not None:
-        made = points[np.isfinite(np.array([_guess_features(run)[0] for run in runs]))]
+        made = points[np.isfinite(features_made[:, 0])]
         best = made[int(np.argmax(emulator.loglik(made)))]
         measured = [model_error(from_coordinates(law, x))
                     for x in error_points(best, samples, box)]
@@ -165,7 +187,7 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     natural = np.array([list(from_coordinates(law, row).values()) for row in samples])
     values = likelihood(runs, np.ones(len(runs), dtype=bool), carried["error"])
     return Posterior(law, natural, evidence, points, values, box,
-                     clock.perf_counter() - began, carried["error"], emulator)
+                     clock.perf_counter() - began, carried["error"])
 
 
 MESH_CHECK_REACH = 1.0

@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol
 
 import emcee
 import numpy as np
 from scipy.special import logsumexp
-from scipy.stats import multivariate_normal, qmc
+from scipy.stats import multivariate_normal
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, WhiteKernel
@@ -82,9 +82,6 @@ class Posterior:
     model_error
         The features' error from the mesh the likelihood carried
         (:func:`~slipwave.fit.ensemble.mesh_error`), or None.
-    model
-        The model of the log-likelihood the samples were drawn from (an emulator of the
-        features, :class:`~slipwave.fit.emulator.FeatureEmulator`), or None.
 
     """
 
@@ -96,7 +93,6 @@ class Posterior:
     box: np.ndarray
     seconds: float = 0.0
     model_error: np.ndarray | None = None
-    model: LogLikelihood | None = field(default=None, repr=False)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -122,35 +118,6 @@ class Posterior:
         low, median, high = np.quantile(self.samples, [0.025, 0.5, 0.975], axis=0)
         return {name: {"value": float(m), "low": float(a), "high": float(b)}
                 for name, a, m, b in zip(self.names, low, median, high, strict=True)}
-
-
-def _inside(law: str, box: np.ndarray, dc_per_excess: float
-            ) -> Callable[[np.ndarray], np.ndarray]:
-    """Which points (rows) lie in the box and the prior's support."""
-    def inside(x: np.ndarray) -> np.ndarray:
-        x = np.atleast_2d(x)
-        return (np.all((x >= box[:, 0]) & (x <= box[:, 1]), axis=1)
-                & prior_mask(law, x, dc_per_excess=dc_per_excess))
-    return inside
-
-
-def _fill(law: str, box: np.ndarray, count: int, rng: np.random.Generator,
-          inside: Callable[[np.ndarray], np.ndarray], *, latin: bool) -> np.ndarray:
-    """``count`` points of the box within the prior: a Latin hypercube or Sobol points."""
-    p = box.shape[0]
-    found: list[np.ndarray] = []
-    for _ in range(50):
-        draw = (qmc.LatinHypercube(d=p, seed=rng) if latin else
-                qmc.Sobol(d=p, scramble=True, seed=rng)).random(max(count, 8) * 4 if not latin
-                                                                 else count)
-        points = qmc.scale(draw, box[:, 0], box[:, 1])
-        found.extend(points[inside(points)])
-        if len(found) >= count:
-            break
-    if not found:
-        raise SlipwaveError(f"the {law} law's search box {box.tolist()} holds no point of its "
-                            "prior")
-    return np.array(found[:count])
 
 
 @dataclass
@@ -496,6 +463,7 @@ def upper_bound_search(evaluate: Callable[[np.ndarray], np.ndarray], box: np.nda
     --------
     A Gaussian likelihood of mean 0.3 and standard deviation 0.05 over [0, 1]:
 
+    >>> from scipy.stats import qmc
     >>> box = np.array([[0.0, 1.0]])
     >>> def draw(count, rng):
     ...     return qmc.LatinHypercube(d=1, seed=rng).random(count)
