@@ -252,7 +252,8 @@ def test_the_search_recovers_a_known_gaussian_posterior():
     rng = np.random.default_rng(4)
     observed = np.array([0.9, 0.6, 0.3])
     error = np.full(3, 1e-3)
-    settings = SearchSettings(design=6, refinements=3, samples=2000, seed=0)
+    settings = SearchSettings(design=6, refinements=3, draw_temperature=3.0, samples=2000,
+                              seed=0)
     box = np.array([[0.5, 1.2], [0.5, 0.7]])
     posterior = search_law("coulomb", _gaussian_simulator(rng, 0.01),
                            SyntheticLikelihood(observed, error), box, settings)
@@ -302,7 +303,8 @@ def test_evidence_prefers_the_law_the_data_need():
         mean = np.array([params["fs"], params["fd"], params["fs"] - params["fd"]])
         return mean + rng.normal(0.0, 0.01, (4, 3))
 
-    settings = SearchSettings(design=6, refinements=3, samples=300, seed=0)
+    settings = SearchSettings(design=6, refinements=3, draw_temperature=3.0, samples=300,
+                              seed=0)
     likelihood = SyntheticLikelihood(observed, np.full(3, 1e-3))
     simple = search_law("coulomb", coulomb, likelihood, np.array([[0.7, 1.1], [0.5, 0.7]]),
                         settings)
@@ -326,7 +328,8 @@ def test_a_likelihood_narrower_than_the_guesses_spacing_is_found():
         return mean + rng.normal(0.0, 0.002, (3, 3))
 
     observed = weakening(truth).mean(axis=0)
-    settings = SearchSettings(design=6, refinements=3, samples=1000, seed=0)
+    settings = SearchSettings(design=6, refinements=3, draw_temperature=3.0, samples=1000,
+                              seed=0)
     posterior = search_law("slip-weakening", weakening,
                            SyntheticLikelihood(observed, np.full(3, 1e-3)),
                            np.array([[0.7, 1.1], [0.5, 0.7], [-2.3, -0.5]]), settings)
@@ -367,7 +370,8 @@ def test_the_mesh_error_is_the_meshes_difference_beyond_the_members_scatter():
 def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
     """A feature off by a mesh error of 0.05: without it fs is pulled, with it covered."""
     observed = np.array([0.9, 0.6, 0.35])  # fs - fd reads 0.05 high, as a coarse mesh may
-    settings = SearchSettings(design=6, refinements=3, samples=1000, seed=0)
+    settings = SearchSettings(design=6, refinements=3, draw_temperature=3.0, samples=1000,
+                              seed=0)
     box = np.array([[0.6, 1.2], [0.45, 0.75]])
     likelihood = SyntheticLikelihood(observed, np.full(3, 1e-3))
     runs = {}
@@ -388,7 +392,8 @@ def test_a_mesh_error_widens_the_posterior_it_is_carried_by():
 def test_the_model_error_is_its_root_mean_square_over_the_posteriors_reach():
     """Measured at the best guess and the ends of the posterior's longest axis, not at one point."""
     observed = np.array([0.9, 0.6, 0.3])
-    settings = SearchSettings(design=6, refinements=3, samples=1000, seed=0)
+    settings = SearchSettings(design=6, refinements=3, draw_temperature=3.0, samples=1000,
+                              seed=0)
     likelihood = SyntheticLikelihood(observed, np.full(3, 0.01))
     measured_at = []
 

@@ -44,6 +44,7 @@ REACHES = [
     ("fit", "time_error_s", 0.2, {"fit"}),
     ("fit", "design", 3, {"fit"}),
     ("fit", "refinements", 2, {"fit"}),
+    ("fit", "draw_temperature", 2.0, {"fit"}),
     ("fit", "samples", 1000, {"fit"}),
     ("fit", "predictive_members", 8, {"fit"}),
     ("fit", "seed", 7, {"fit"}),

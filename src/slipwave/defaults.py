@@ -127,7 +127,7 @@ FIT_ELEMENTS: int = _setting("fit", "elements")
 """Elements along the contact in the fit's simulations (and the test's simulation)."""
 FIT_TUNABLES: tuple[str, ...] = ("members", "stiffness_error", "speed_error", "step_jitter",
                                   "ratio_error", "time_error_s", "design", "refinements",
-                                  "samples", "predictive_members", "seed")
+                                  "draw_temperature", "samples", "predictive_members", "seed")
 """The fit's numeric settings besides the mesh and the calibration (the ensemble, the
 measurement's errors, the search), each an option of ``slipwave fit`` of its name."""
 FIT_DEFAULTS: dict[str, Any] = {key: _setting("fit", key) for key in FIT_TUNABLES}

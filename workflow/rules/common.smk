@@ -146,7 +146,7 @@ def fit_options(wildcards):
     return " ".join(
         f"--{key.replace('_', '-')} {config['fit'][key]}"
         for key in ("members", "stiffness_error", "speed_error", "step_jitter",
-                    "ratio_error", "time_error_s", "design", "refinements", "samples",
+                    "ratio_error", "time_error_s", "design", "refinements", "draw_temperature", "samples",
                     "predictive_members", "seed")
     )
 

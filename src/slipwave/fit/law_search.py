@@ -137,7 +137,8 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     ...     mean = np.array([p["fs"], p["fd"], p["fs"] - p["fd"]])
     ...     return mean + rng.normal(0.0, 0.01, (4, 3))
     >>> likelihood = SyntheticLikelihood(np.array([0.9, 0.6, 0.3]), np.full(3, 1e-3))
-    >>> settings = SearchSettings(design=6, refinements=2, samples=1000, seed=0)
+    >>> settings = SearchSettings(design=6, refinements=2, draw_temperature=3.0,
+    ...                           samples=1000, seed=0)
     >>> posterior = search_law("coulomb", simulate, likelihood,
     ...                        np.array([[0.6, 1.2], [0.45, 0.75]]), settings)
     >>> summary = posterior.summary()
@@ -173,7 +174,7 @@ def search_law(law: str, simulate: Callable[[Mapping[str, float]], np.ndarray],
     samples, points, features_made, emulator = emulator_search(
         features, box, draw, inside, loglik_of, design=settings.design,
         refinements=settings.refinements, samples=settings.samples, seed=settings.seed,
-        batch=BATCH, warm=True)
+        batch=BATCH, warm=True, temperature=settings.draw_temperature)
     rng = np.random.default_rng(settings.seed)
     if model_error is not None:
         made = points[np.isfinite(features_made[:, 0])]

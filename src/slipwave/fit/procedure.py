@@ -114,7 +114,8 @@ class FitSettings:
                                        float(v["speed_error"]), float(v["step_jitter"])),
                    ratio_error=float(v["ratio_error"]), time_error=float(v["time_error_s"]),
                    search=SearchSettings(int(v["design"]), int(v["refinements"]),
-                                         int(v["samples"]), int(v["seed"])),
+                                         float(v["draw_temperature"]), int(v["samples"]),
+                                         int(v["seed"])),
                    predictive_members=int(v["predictive_members"]),
                    mesh_check=bool(v["mesh_check"]))
 
@@ -627,7 +628,8 @@ def fit_test(setup: TestSetup, measured: pd.DataFrame, settings: FitSettings, *,
                          "ratio_error": settings.ratio_error,
                          "time_error_s": settings.time_error,
                          **{key: getattr(settings.search, key) for key in (
-                             "design", "refinements", "samples", "seed")}},
+                             "design", "refinements", "draw_temperature", "samples",
+                             "seed")}},
             "predictive": predictive,
             "mesh_check": finer}
 

@@ -46,6 +46,9 @@ class SearchSettings:
         (:func:`~slipwave.fit.law_search.search_law`).
     refinements
         Guesses drawn from the emulated posterior after it, per parameter.
+    draw_temperature
+        Their draws' posterior tempered by it
+        (:func:`~slipwave.fit.emulator.tempered`).
     samples
         Posterior samples kept.
     seed
@@ -55,6 +58,7 @@ class SearchSettings:
 
     design: int
     refinements: int
+    draw_temperature: float
     samples: int
     seed: int
 
