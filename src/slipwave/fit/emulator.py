@@ -95,9 +95,10 @@ class StackedProcesses:
 
     Each process is a constant times an anisotropic RBF plus white noise
     (:func:`~slipwave.fit.search.gaussian_process`), fitted to one output with
-    ``normalize_y``. A prediction by each process's own ``predict`` costs about 80 µs of
-    checks and kernel objects' calls, whatever the points: emcee's walkers ask a dozen
-    processes about eight points at a time, tens of thousands of times a fit. Stacked,
+    ``normalize_y``. One process at a time, a prediction costs some 180 µs a process
+    with scikit-learn's checks and kernel objects (its ``predict``), 85 µs without them,
+    whatever the points: emcee's walkers ask thirteen processes about eight points at a
+    time, tens of thousands of times a fit. Stacked (about 90 µs for all thirteen),
     the processes' runs padded to the most any learnt from (a padded run weighs
     nothing: its weight in ``alpha`` and its column of ``whitening`` are zero), one call
     predicts them all.
