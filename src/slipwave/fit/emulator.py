@@ -11,8 +11,9 @@ methods using Gaussian processes", AISTATS; the emulation of summaries of Jabot 
 2014), and the likelihood is computed from the emulated features with the emulator's
 own variance added to the features' (what it has not seen widens the posterior rather
 than hiding it). The guesses after a Latin hypercube are drawn from that posterior
-(emcee), each batch refitting the emulator where the posterior is: the ridge is found by
-the emulator's likelihood, sharp as the data make it, not by the guesses.
+(emcee), tempered where the emulator's errors would otherwise cut a ridge short
+(:func:`tempered`), each batch refitting the emulator where the posterior is: the ridge
+is found by the emulator's likelihood, sharp as the data make it, not by the guesses.
 """
 
 from __future__ import annotations
