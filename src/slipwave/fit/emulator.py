@@ -96,8 +96,8 @@ class StackedProcesses:
 
     Each process is a constant times an anisotropic RBF plus white noise
     (:func:`~slipwave.fit.search.gaussian_process`), fitted to one output with
-    ``normalize_y``. One process at a time, a prediction costs some 180 µs a process
-    with scikit-learn's checks and kernel objects (its ``predict``), 85 µs without them,
+    ``normalize_y``. One process at a time, a prediction costs some 170 µs a process
+    with scikit-learn's checks and kernel objects (its ``predict``), 40 µs without them,
     whatever the points: emcee's walkers ask thirteen processes about eight points at a
     time, tens of thousands of times a fit. Stacked (about 90 µs for all thirteen),
     the processes' runs padded to the most any learnt from (a padded run weighs
