@@ -281,9 +281,7 @@ class SyntheticLikelihood:
             covariance = pooled_covariance(chosen)
         except ValueError:
             covariance = pooled_covariance(runs)
-        error = (self.measurement_error if model_error is None
-                 else np.hypot(self.measurement_error, model_error))
-        return pooled_logliks(self.observed, runs, covariance, error)
+        return pooled_logliks(self.observed, runs, covariance, self._error(model_error))
 
     def emulated(self, runs: list[np.ndarray], model_error: np.ndarray | None = None
                  ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
@@ -302,8 +300,11 @@ class SyntheticLikelihood:
             ``(means, variances) -> log-likelihoods`` (:func:`emulated_logliks`).
 
         """
-        covariance = pooled_covariance(runs)
-        error = (self.measurement_error if model_error is None
-                 else np.hypot(self.measurement_error, model_error))
-        return partial(emulated_logliks, self.observed, covariance=covariance,
-                       measurement_error=error)
+        return partial(emulated_logliks, self.observed, covariance=pooled_covariance(runs),
+                       measurement_error=self._error(model_error))
+
+    def _error(self, model_error: np.ndarray | None) -> np.ndarray:
+        """The measurement's errors, with the model's in quadrature where given."""
+        if model_error is None:
+            return self.measurement_error
+        return np.hypot(self.measurement_error, model_error)
