@@ -1256,7 +1256,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="fit friction laws to a test through the solver",
         description="Read the test's configuration from its recording and the campaign "
         "table's cells, then fit each friction law on the slip events (T/|N| at gross "
-        "slips, their times, slip counts) with 95 % intervals, and choose by AIC.")
+        "slips, their times, slip counts) by its synthetic likelihood, with 95 % "
+        "posterior intervals, and choose the law of highest evidence whose posterior "
+        "predictive reproduces every feature.")
     fit.add_argument("recording", type=_input, help="recording netCDF from 'slipwave ingest'")
     fit.add_argument("-o", "--output", type=Path, required=True, help="fit.json to write")
     fit.add_argument("--setting", type=_setting_pair, nargs="*", default=[],
