@@ -50,7 +50,7 @@ class FeatureEmulator:
         shape (n, features).
     stacked
         The processes stacked for their predictions (:func:`stack_processes`; formed
-        with the emulator, 0.6 ms for thirteen).
+        with the emulator, once a batch).
 
     """
 
@@ -99,13 +99,12 @@ class StackedProcesses:
 
     Each process is a constant times an anisotropic RBF plus white noise
     (:func:`~slipwave.fit.search.gaussian_process`), fitted to one output with
-    ``normalize_y``. One process at a time, a prediction costs some 170 µs a process
-    with scikit-learn's checks and kernel objects (its ``predict``), 40 µs without them,
-    whatever the points: emcee's walkers ask thirteen processes about eight points at a
-    time, tens of thousands of times a fit. Stacked (about 90 µs for all thirteen),
-    the processes' runs padded to the most any learnt from (a padded run weighs
-    nothing: its weight in ``alpha`` and its column of ``whitening`` are zero), one call
-    predicts them all.
+    ``normalize_y``. One process at a time, a prediction's cost is mostly scikit-learn's
+    checks and kernel objects' calls, whatever the points, and emcee's walkers ask
+    thirteen processes about eight points at a time, tens of thousands of times a fit
+    (the times are in the CHANGELOG). Stacked, the processes' runs padded to the most
+    any learnt from (a padded run weighs nothing: its weight in ``alpha`` and its column
+    of ``whitening`` are zero), one call predicts them all.
 
     Attributes
     ----------
