@@ -28,6 +28,22 @@ def test_drive_and_normal_load_are_measured_on_the_recording(hl075):
     assert normal_load_plateau(hl075) == pytest.approx(85.0, rel=0.01)
 
 
+def test_a_spike_during_the_normal_loading_is_no_tangential_start(hl075):
+    # a virtual-bench test had one sample of T 3.4 N high while N rose: taken for the
+    # tangential loading's start, it read the normal load at half its plateau
+    spiked = hl075.copy(deep=True)
+    time, T, N = (spiked[name].values for name in ("time", "T", "N"))
+    rising = int(np.searchsorted(time, 5.0))
+    assert abs(N[rising]) < 0.7 * 85.0  # still pressing
+    T[rising] += 0.2 * (np.nanpercentile(T, 99) - np.nanpercentile(T, 1))
+    N[rising + 100] = -90.0  # and a spike of N above the plateau before it is reached
+    clean = read_test_setup(hl075, {"test_id": "hl075", **MATERIAL})
+    setup = read_test_setup(spiked, {"test_id": "hl075", **MATERIAL})
+    assert normal_load_plateau(spiked) == pytest.approx(85.0, rel=0.01)
+    for key in ("normal_load_n", "loading_time_s", "speed_mm_s", "machine_stiffness_n_mm"):
+        assert setup[key] == pytest.approx(clean[key], rel=1e-3), key
+
+
 def test_setup_reads_the_header_then_the_table_and_says_where_from(hl075):
     setup = read_test_setup(hl075, {"test_id": "hl075", **MATERIAL})
     assert setup["height_mm"] == 60.0 and setup.settings["height_mm"].source == \
