@@ -187,7 +187,7 @@ def one(job: tuple[int, int, int]) -> dict[str, Any]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--seed", type=int, default=4302)  # fresh for the reported figures
+    parser.add_argument("--seed", type=int, default=4503)  # fresh for the reported figures
     parser.add_argument("--tests", type=int, default=20)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--output", type=Path, default=None, help="JSON of every test's fit")
