@@ -9,7 +9,7 @@ import pytest
 
 from slipwave.errors import SlipwaveError
 from slipwave.io import read_acquisition
-from slipwave.setup import drive, normal_load_plateau, read_test_setup
+from slipwave.setup import drive, normal_load_plateau, normal_loading_time, read_test_setup
 
 RAW = Path(__file__).parents[1] / "raw_data" / "bench"
 MATERIAL = {"youngs_modulus_mpa": "7", "poisson_ratio": "0.48", "edge_reference": "frame"}
@@ -42,6 +42,11 @@ def test_a_spike_during_the_normal_loading_is_no_tangential_start(hl075):
     assert normal_load_plateau(spiked) == pytest.approx(85.0, rel=0.01)
     for key in ("normal_load_n", "loading_time_s", "speed_mm_s", "machine_stiffness_n_mm"):
         assert setup[key] == pytest.approx(clean[key], rel=1e-3), key
+    spikes_only = hl075.copy(deep=True)
+    spikes_only["N"].values[:] = 0.0
+    spikes_only["N"].values[::10] = -85.0  # never held: no loading to time
+    with pytest.raises(SlipwaveError, match="N never holds its plateau"):
+        normal_loading_time(spikes_only, 85.0)
 
 
 def test_setup_reads_the_header_then_the_table_and_says_where_from(hl075):

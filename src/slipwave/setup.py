@@ -347,24 +347,24 @@ def driven_load_path(*, normal_load: float, speed: float, duration: float,
 
 
 def _first_held(condition: np.ndarray) -> int:
-    """The first sample from which ``condition`` holds for longer than a spike.
+    """The first sample from which ``condition`` holds for longer than a spike; -1 if none.
 
-    A spike of up to :data:`~slipwave.defaults.MAX_SPIKE` samples is no start: on a
-    virtual-bench test, one sample of T 3.4 N high during the normal loading (the card's
-    spikes) was taken for the tangential loading's start, and the normal load read at
-    half its plateau (44 N for 85 N). 0 where it never holds that long.
+    A spike of up to :data:`~slipwave.defaults.MAX_SPIKE` samples is no start: one of
+    the card's spikes of T during the normal loading, taken for the tangential loading's
+    start, had the normal load read on its rise.
     """
     held = MAX_SPIKE + 1
     if condition.size < held:
-        return 0
-    return int(np.argmax(np.lib.stride_tricks.sliding_window_view(condition, held).all(axis=1)))
+        return -1
+    runs = np.lib.stride_tricks.sliding_window_view(condition, held).all(axis=1)
+    return int(np.argmax(runs)) if runs.any() else -1
 
 
 def _tangential_window(recording: xr.Dataset) -> np.ndarray:
     """Samples after the normal loading: from where T stays above 5 % of its range."""
     T = recording["T"].values
     low, high = np.nanpercentile(T, [1, 99])
-    start = _first_held(T - low > 0.05 * (high - low))
+    start = max(_first_held(T - low > 0.05 * (high - low)), 0)
     return np.arange(start, T.size)
 
 
@@ -423,11 +423,11 @@ def normal_loading_time(recording: xr.Dataset, plateau: float) -> float:
         raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: no N channel to "
                             "time the normal loading on")
     time = recording["time"].values
-    reached = np.abs(recording["N"].values) >= 0.99 * plateau
-    if not reached.any():
-        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: N never reaches "
+    reached = _first_held(np.abs(recording["N"].values) >= 0.99 * plateau)
+    if reached < 0:
+        raise SlipwaveError(f"test {recording.attrs.get('test_id', '?')!r}: N never holds "
                             "its plateau: no normal loading to time")
-    return float(time[_first_held(reached)] - time[0])
+    return float(time[reached] - time[0])
 
 
 def drive(recording: xr.Dataset, *, stiffness: float | None = None) -> tuple[float, float]:
